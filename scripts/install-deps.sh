@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# Installs everything indentsim needs on a fresh Debian 12 machine, idempotently.
+# Toolchain, CMake and every library come from Debian's packages; nothing else is downloaded.
+set -euo pipefail
+
+packages=(
+  build-essential cmake pkg-config git
+  libsundials-dev libsuitesparse-dev libeigen3-dev libfmt-dev
+  libgtest-dev libtomlplusplus-dev libcli11-dev
+  python3 python3-matplotlib
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+
+if [ "${#missing[@]}" -eq 0 ]; then
+  echo "install-deps: all ${#packages[@]} packages already installed"
+  exit 0
+fi
+
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+echo "install-deps: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+echo "install-deps: done"
