@@ -1,0 +1,27 @@
+#pragma once
+// Errors the library reports to its callers.  Input problems are the user's to fix
+// (the CLI turns them into exit status 2); solver failures are the model's.
+#include <stdexcept>
+#include <string>
+
+namespace indentsim {
+
+/// Bad input: names the file, the key and what is wrong with it.
+class InputError : public std::runtime_error {
+public:
+  InputError(std::string file, std::string key, std::string problem);
+  const std::string& file() const { return file_; }
+  const std::string& key() const { return key_; }
+  const std::string& problem() const { return problem_; }
+
+private:
+  std::string file_, key_, problem_;
+};
+
+/// A nonlinear solve that could not be completed (after every allowed cutback).
+class SolverError : public std::runtime_error {
+public:
+  using std::runtime_error::runtime_error;
+};
+
+}  // namespace indentsim

@@ -1,0 +1,85 @@
+#pragma once
+// A load case: everything a run needs, read from a TOML file (SI units throughout).
+// The section and key names are fixed by the project so that load cases stay portable.
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace indentsim {
+
+struct GeometryInput {
+  double lx = 15e-3;  ///< block width of the half model [m]
+  double ly = 10e-3;  ///< block depth [m]
+};
+
+struct PunchInput {
+  double radius = 2e-3;  ///< rigid cylinder radius R [m]
+};
+
+enum class MaterialModel { elastic, ilyushin, j2 };
+enum class HardeningLaw { linear, power };
+
+struct MaterialInput {
+  MaterialModel model = MaterialModel::elastic;
+  double E = 210e9;   ///< Young's modulus [Pa]
+  double nu = 0.3;    ///< Poisson's ratio [-]
+  double e0 = 0.027;  ///< elastic limit of the strain intensity [-]
+  HardeningLaw hardening = HardeningLaw::linear;
+  double kappa = 0.9;  ///< linear law: omega = kappa (1 - e0/e_u)
+  double n = 0.3;      ///< power law: sigma_u ~ e_u^n
+};
+
+struct LoadInput {
+  std::vector<double> path{0.0, 5e-5};  ///< indentation depth waypoints alpha [m], from 0
+  int increments = 10;                  ///< total increments along the path
+};
+
+struct MeshInput {
+  int contact_nodes = 20;  ///< fine-zone elements across the estimated final contact half-width
+  std::optional<double> contact_half_width;  ///< override of the estimate a* [m]
+  std::optional<double> fine_width;          ///< override: width of the uniform zone [m]
+  std::optional<double> fine_depth;          ///< override: depth of the uniform zone [m]
+  std::optional<double> growth;              ///< override: geometric growth ratio of the far field
+};
+
+struct OutputInput {
+  std::string dir = "out";  ///< output folder (relative to the working directory)
+};
+
+struct SolverInput {
+  double tolerance = 1e-11;  ///< residual max-norm relative to E* x max depth
+  int max_newton = 50;       ///< Newton iterations per increment before a cutback
+  int max_cutbacks = 10;     ///< halvings of one increment before the run stops
+};
+
+struct LoadCase {
+  std::string source = "<defaults>";  ///< file it was read from, for messages
+  GeometryInput geometry;
+  PunchInput punch;
+  MaterialInput material;
+  LoadInput load;
+  MeshInput mesh;
+  OutputInput output;
+  SolverInput solver;
+
+  double max_depth() const;
+};
+
+/// Reads and validates a load case.  `overrides` are "section.key=value" strings
+/// (the CLI's --set) applied before validation; values are parsed as TOML values,
+/// falling back to a plain string.  Throws InputError naming file, key and problem.
+LoadCase read_load_case(const std::filesystem::path& file,
+                        const std::vector<std::string>& overrides = {});
+
+/// Parses a load case from TOML text (tests, fuzzing); `source` names it in messages.
+LoadCase parse_load_case(const std::string& toml_text, const std::string& source,
+                         const std::vector<std::string>& overrides = {});
+
+/// Checks every physical constraint (E > 0, -1 < nu < 0.5, ...); throws InputError.
+void validate(const LoadCase& load_case);
+
+std::string to_string(MaterialModel model);
+std::string to_string(HardeningLaw law);
+
+}  // namespace indentsim

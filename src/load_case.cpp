@@ -1,0 +1,362 @@
+#include "indentsim/load_case.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <set>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <toml++/toml.h>
+
+#include "indentsim/error.hpp"
+
+namespace indentsim {
+
+InputError::InputError(std::string file, std::string key, std::string problem)
+    : std::runtime_error(fmt::format("{}: {}: {}", file, key.empty() ? "(file)" : key, problem)),
+      file_(std::move(file)),
+      key_(std::move(key)),
+      problem_(std::move(problem)) {}
+
+double LoadCase::max_depth() const {
+  double deepest = 0.0;
+  for (double alpha : load.path) deepest = std::max(deepest, alpha);
+  return deepest;
+}
+
+std::string to_string(MaterialModel model) {
+  switch (model) {
+    case MaterialModel::elastic: return "elastic";
+    case MaterialModel::ilyushin: return "ilyushin";
+    case MaterialModel::j2: return "j2";
+  }
+  return "?";
+}
+
+std::string to_string(HardeningLaw law) { return law == HardeningLaw::linear ? "linear" : "power"; }
+
+namespace {
+
+// The schema: every section and key a load case may contain, and which are required.
+struct KeySpec {
+  const char* name;
+  bool required;
+};
+struct SectionSpec {
+  const char* name;
+  bool required;
+  std::vector<KeySpec> keys;
+};
+
+const std::vector<SectionSpec>& schema() {
+  static const std::vector<SectionSpec> sections = {
+      {"geometry", true, {{"lx", true}, {"ly", true}}},
+      {"punch", true, {{"radius", true}}},
+      {"material",
+       true,
+       {{"model", true}, {"E", true}, {"nu", true}, {"e0", false}, {"hardening", false},
+        {"kappa", false}, {"n", false}}},
+      {"load", true, {{"path", true}, {"increments", true}}},
+      {"mesh",
+       false,
+       {{"contact_nodes", false}, {"contact_half_width", false}, {"fine_width", false},
+        {"fine_depth", false}, {"growth", false}}},
+      {"output", false, {{"dir", false}}},
+      {"solver", false, {{"tolerance", false}, {"max_newton", false}, {"max_cutbacks", false}}},
+  };
+  return sections;
+}
+
+const SectionSpec* find_section(std::string_view name) {
+  for (const auto& s : schema())
+    if (name == s.name) return &s;
+  return nullptr;
+}
+
+std::string known_keys(const SectionSpec& section) {
+  std::string list;
+  for (const auto& k : section.keys) list += (list.empty() ? "" : ", ") + std::string(k.name);
+  return list;
+}
+
+class Reader {
+public:
+  Reader(const toml::table& root, std::string source) : root_(root), source_(std::move(source)) {}
+
+  [[noreturn]] void fail(const std::string& key, const std::string& problem) const {
+    throw InputError(source_, key, problem);
+  }
+
+  void check_structure() const {
+    for (const auto& [name, node] : root_) {
+      const std::string section_name(name.str());
+      const SectionSpec* spec = find_section(section_name);
+      if (!spec) {
+        std::string sections;
+        for (const auto& s : schema()) sections += (sections.empty() ? "" : ", ") + std::string(s.name);
+        fail(section_name, fmt::format("unknown section (known sections: {})", sections));
+      }
+      const toml::table* table = node.as_table();
+      if (!table) fail(section_name, "must be a table ([" + section_name + "])");
+      for (const auto& [key, value] : *table) {
+        const std::string key_name(key.str());
+        const bool known = std::any_of(spec->keys.begin(), spec->keys.end(),
+                                       [&](const KeySpec& k) { return key_name == k.name; });
+        if (!known)
+          fail(section_name + "." + key_name,
+               fmt::format("unknown key (known keys of [{}]: {})", section_name, known_keys(*spec)));
+      }
+    }
+    for (const auto& section : schema()) {
+      const toml::table* table = root_[section.name].as_table();
+      if (!table) {
+        if (section.required) fail(section.name, "missing section");
+        continue;
+      }
+      for (const auto& key : section.keys)
+        if (key.required && !table->contains(key.name))
+          fail(std::string(section.name) + "." + key.name, "missing key");
+    }
+  }
+
+  const toml::node* find(const std::string& section, const std::string& key) const {
+    const toml::table* table = root_[section].as_table();
+    return table ? table->get(key) : nullptr;
+  }
+
+  void read_number(const std::string& section, const std::string& key, double& target) const {
+    const toml::node* node = find(section, key);
+    if (!node) return;
+    if (auto v = node->value_exact<double>()) target = *v;
+    else if (auto i = node->value_exact<int64_t>()) target = static_cast<double>(*i);
+    else fail(section + "." + key, fmt::format("expected a number, got {}", type_name(*node)));
+    if (!std::isfinite(target)) fail(section + "." + key, "must be a finite number");
+  }
+
+  void read_optional_number(const std::string& section, const std::string& key,
+                            std::optional<double>& target) const {
+    if (!find(section, key)) return;
+    double value = 0.0;
+    read_number(section, key, value);
+    target = value;
+  }
+
+  void read_integer(const std::string& section, const std::string& key, int& target) const {
+    const toml::node* node = find(section, key);
+    if (!node) return;
+    auto i = node->value_exact<int64_t>();
+    if (!i) fail(section + "." + key, fmt::format("expected an integer, got {}", type_name(*node)));
+    if (*i < std::numeric_limits<int>::min() || *i > std::numeric_limits<int>::max())
+      fail(section + "." + key, fmt::format("{} is out of range", *i));
+    target = static_cast<int>(*i);
+  }
+
+  void read_string(const std::string& section, const std::string& key, std::string& target) const {
+    const toml::node* node = find(section, key);
+    if (!node) return;
+    auto s = node->value_exact<std::string>();
+    if (!s) fail(section + "." + key, fmt::format("expected a string, got {}", type_name(*node)));
+    target = *s;
+  }
+
+  void read_number_array(const std::string& section, const std::string& key,
+                         std::vector<double>& target) const {
+    const toml::node* node = find(section, key);
+    if (!node) return;
+    const toml::array* array = node->as_array();
+    if (!array) fail(section + "." + key, fmt::format("expected an array of numbers, got {}", type_name(*node)));
+    target.clear();
+    for (std::size_t i = 0; i < array->size(); ++i) {
+      const toml::node& item = *array->get(i);
+      if (auto v = item.value_exact<double>()) target.push_back(*v);
+      else if (auto n = item.value_exact<int64_t>()) target.push_back(static_cast<double>(*n));
+      else fail(section + "." + key, fmt::format("element {} is {}, expected a number", i, type_name(item)));
+      if (!std::isfinite(target.back())) fail(section + "." + key, fmt::format("element {} is not finite", i));
+    }
+  }
+
+  static std::string type_name(const toml::node& node) {
+    switch (node.type()) {
+      case toml::node_type::string: return "a string";
+      case toml::node_type::integer: return "an integer";
+      case toml::node_type::floating_point: return "a floating-point number";
+      case toml::node_type::boolean: return "a boolean";
+      case toml::node_type::array: return "an array";
+      case toml::node_type::table: return "a table";
+      default: return "a date/time";
+    }
+  }
+
+  const std::string& source() const { return source_; }
+
+private:
+  const toml::table& root_;
+  std::string source_;
+};
+
+// --set section.key=value: the value is read as a TOML value ("1e-3", "[0, 1e-5]", "\"j2\"")
+// and, when it is not one, as a bare string (so --set material.model=j2 works).
+void apply_override(toml::table& root, const std::string& text, const std::string& source) {
+  const auto eq = text.find('=');
+  if (eq == std::string::npos)
+    throw InputError(source, text, "--set expects section.key=value");
+  const std::string path = text.substr(0, eq);
+  const std::string value_text = text.substr(eq + 1);
+  const auto dot = path.find('.');
+  if (dot == std::string::npos || dot == 0 || dot + 1 == path.size() ||
+      path.find('.', dot + 1) != std::string::npos)
+    throw InputError(source, path, "--set expects section.key=value");
+  const std::string section = path.substr(0, dot);
+  const std::string key = path.substr(dot + 1);
+
+  toml::table parsed;
+  bool is_toml_value = true;
+  try {
+    parsed = toml::parse("value = " + value_text);
+  } catch (const toml::parse_error&) {
+    is_toml_value = false;
+  }
+  if (!root.contains(section)) root.insert(section, toml::table{});
+  toml::table* table = root[section].as_table();
+  if (!table) throw InputError(source, section, "must be a table");
+  if (is_toml_value && parsed.contains("value"))
+    table->insert_or_assign(key, *parsed.get("value"));
+  else
+    table->insert_or_assign(key, value_text);
+}
+
+LoadCase from_table(const toml::table& root, const std::string& source) {
+  Reader r(root, source);
+  r.check_structure();
+  LoadCase lc;
+  lc.source = source;
+  r.read_number("geometry", "lx", lc.geometry.lx);
+  r.read_number("geometry", "ly", lc.geometry.ly);
+  r.read_number("punch", "radius", lc.punch.radius);
+
+  std::string model = "elastic";
+  r.read_string("material", "model", model);
+  if (model == "elastic") lc.material.model = MaterialModel::elastic;
+  else if (model == "ilyushin") lc.material.model = MaterialModel::ilyushin;
+  else if (model == "j2") lc.material.model = MaterialModel::j2;
+  else r.fail("material.model", fmt::format("\"{}\" is not a model (elastic, ilyushin, j2)", model));
+  r.read_number("material", "E", lc.material.E);
+  r.read_number("material", "nu", lc.material.nu);
+  r.read_number("material", "e0", lc.material.e0);
+  std::string hardening = "linear";
+  r.read_string("material", "hardening", hardening);
+  if (hardening == "linear") lc.material.hardening = HardeningLaw::linear;
+  else if (hardening == "power") lc.material.hardening = HardeningLaw::power;
+  else r.fail("material.hardening", fmt::format("\"{}\" is not a law (linear, power)", hardening));
+  r.read_number("material", "kappa", lc.material.kappa);
+  r.read_number("material", "n", lc.material.n);
+
+  r.read_number_array("load", "path", lc.load.path);
+  r.read_integer("load", "increments", lc.load.increments);
+
+  r.read_integer("mesh", "contact_nodes", lc.mesh.contact_nodes);
+  r.read_optional_number("mesh", "contact_half_width", lc.mesh.contact_half_width);
+  r.read_optional_number("mesh", "fine_width", lc.mesh.fine_width);
+  r.read_optional_number("mesh", "fine_depth", lc.mesh.fine_depth);
+  r.read_optional_number("mesh", "growth", lc.mesh.growth);
+
+  r.read_string("output", "dir", lc.output.dir);
+
+  r.read_number("solver", "tolerance", lc.solver.tolerance);
+  r.read_integer("solver", "max_newton", lc.solver.max_newton);
+  r.read_integer("solver", "max_cutbacks", lc.solver.max_cutbacks);
+  validate(lc);
+  return lc;
+}
+
+LoadCase parse_and_override(const std::string& text, const std::string& source,
+                            const std::vector<std::string>& overrides) {
+  toml::table root;
+  try {
+    root = toml::parse(text, source);
+  } catch (const toml::parse_error& e) {
+    const auto& where = e.source().begin;
+    throw InputError(source, fmt::format("line {}, column {}", where.line, where.column),
+                     fmt::format("not valid TOML: {}", e.description()));
+  }
+  for (const auto& o : overrides) apply_override(root, o, source);
+  return from_table(root, source);
+}
+
+}  // namespace
+
+void validate(const LoadCase& lc) {
+  const auto fail = [&](const std::string& key, const std::string& problem) {
+    throw InputError(lc.source, key, problem);
+  };
+  const auto positive = [&](const std::string& key, double value) {
+    if (!(value > 0.0)) fail(key, fmt::format("must be > 0 (got {})", value));
+  };
+  positive("geometry.lx", lc.geometry.lx);
+  positive("geometry.ly", lc.geometry.ly);
+  positive("punch.radius", lc.punch.radius);
+  positive("material.E", lc.material.E);
+  if (!(lc.material.nu > -1.0 && lc.material.nu < 0.5))
+    fail("material.nu", fmt::format("must lie in (-1, 0.5) (got {})", lc.material.nu));
+  if (lc.material.model != MaterialModel::elastic) {
+    positive("material.e0", lc.material.e0);
+    if (lc.material.hardening == HardeningLaw::linear &&
+        !(lc.material.kappa >= 0.0 && lc.material.kappa < 1.0))
+      fail("material.kappa", fmt::format("must lie in [0, 1) (got {})", lc.material.kappa));
+    if (lc.material.hardening == HardeningLaw::power && !(lc.material.n > 0.0 && lc.material.n < 1.0))
+      fail("material.n", fmt::format("must lie in (0, 1) (got {})", lc.material.n));
+  }
+
+  const auto& path = lc.load.path;
+  if (path.size() < 2) fail("load.path", "needs at least two waypoints, starting at 0");
+  if (path.front() != 0.0) fail("load.path", fmt::format("must start at 0 (got {})", path.front()));
+  for (std::size_t i = 0; i < path.size(); ++i)
+    if (path[i] < 0.0) fail("load.path", fmt::format("waypoint {} is a negative depth ({})", i, path[i]));
+  if (!(lc.max_depth() > 0.0)) fail("load.path", "never indents: every waypoint is 0");
+  if (lc.max_depth() >= lc.punch.radius)
+    fail("load.path", fmt::format("depth {} reaches the punch radius {}: no circular contact possible",
+                                  lc.max_depth(), lc.punch.radius));
+  if (lc.max_depth() >= lc.geometry.ly)
+    fail("load.path", fmt::format("depth {} is not small against the block depth {}", lc.max_depth(),
+                                  lc.geometry.ly));
+  if (lc.load.increments < 1) fail("load.increments", fmt::format("must be >= 1 (got {})", lc.load.increments));
+  if (lc.load.increments > 10'000'000)
+    fail("load.increments", fmt::format("{} is more than 1e7 increments", lc.load.increments));
+
+  if (lc.mesh.contact_nodes < 2) fail("mesh.contact_nodes", fmt::format("must be >= 2 (got {})", lc.mesh.contact_nodes));
+  if (lc.mesh.contact_half_width) positive("mesh.contact_half_width", *lc.mesh.contact_half_width);
+  if (lc.mesh.fine_width) positive("mesh.fine_width", *lc.mesh.fine_width);
+  if (lc.mesh.fine_depth) positive("mesh.fine_depth", *lc.mesh.fine_depth);
+  if (lc.mesh.growth && !(*lc.mesh.growth >= 1.0 && *lc.mesh.growth <= 2.0))
+    fail("mesh.growth", fmt::format("must lie in [1, 2] (got {})", *lc.mesh.growth));
+
+  if (lc.output.dir.empty()) fail("output.dir", "must not be empty");
+
+  if (!(lc.solver.tolerance > 0.0 && lc.solver.tolerance < 1e-2))
+    fail("solver.tolerance", fmt::format("must lie in (0, 1e-2) (got {})", lc.solver.tolerance));
+  if (lc.solver.max_newton < 1 || lc.solver.max_newton > 1000)
+    fail("solver.max_newton", fmt::format("must lie in [1, 1000] (got {})", lc.solver.max_newton));
+  if (lc.solver.max_cutbacks < 0 || lc.solver.max_cutbacks > 60)
+    fail("solver.max_cutbacks", fmt::format("must lie in [0, 60] (got {})", lc.solver.max_cutbacks));
+}
+
+LoadCase parse_load_case(const std::string& toml_text, const std::string& source,
+                         const std::vector<std::string>& overrides) {
+  return parse_and_override(toml_text, source, overrides);
+}
+
+LoadCase read_load_case(const std::filesystem::path& file, const std::vector<std::string>& overrides) {
+  const std::string source = file.string();
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(file, ec))
+    throw InputError(source, "", "cannot open: not a readable file");
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw InputError(source, "", "cannot open for reading");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_and_override(text.str(), source, overrides);
+}
+
+}  // namespace indentsim
