@@ -1,0 +1,54 @@
+// The paper's closed-form local stiffness matrix against 2x2 Gauss quadrature.
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "indentsim/element.hpp"
+#include "indentsim/material.hpp"
+
+using namespace indentsim;
+
+TEST(Element, ClosedFormEqualsGaussOnRandomRectanglesAndMaterials) {
+  std::mt19937 rng(12345);
+  std::uniform_real_distribution<double> log_size(-6.0, -1.0), log_modulus(6.0, 12.0), poisson(-0.9, 0.499);
+  for (int trial = 0; trial < 500; ++trial) {
+    const Rectangle rect{std::pow(10.0, log_size(rng)), std::pow(10.0, log_size(rng))};
+    const ElasticMaterial material{std::pow(10.0, log_modulus(rng)), poisson(rng)};
+    const ElementMatrix closed = closed_form_stiffness(rect, material.lame());
+    const ElementMatrix gauss = gauss_stiffness(rect, material.stiffness());
+    const double scale = gauss.cwiseAbs().maxCoeff();
+    EXPECT_LE((closed - gauss).cwiseAbs().maxCoeff(), 1e-12 * scale)
+        << "h = " << rect.width << ", tau = " << rect.height << ", nu = " << material.nu;
+  }
+}
+
+TEST(Element, StiffnessIsSymmetricWithRigidBodyModesInItsKernel) {
+  const Rectangle rect{2e-4, 5e-5};
+  const ElementMatrix k = closed_form_stiffness(rect, ElasticMaterial{210e9, 0.3}.lame());
+  EXPECT_LE((k - k.transpose()).cwiseAbs().maxCoeff(), 1e-15 * k.cwiseAbs().maxCoeff());
+  // Vertices (paper order): 1 = (0,0), 2 = (0,tau), 3 = (h,0), 4 = (h,tau).
+  const double xs[4] = {0, 0, rect.width, rect.width}, ys[4] = {0, rect.height, 0, rect.height};
+  ElementVector translation_x = ElementVector::Zero(), translation_y = ElementVector::Zero(), rotation;
+  for (int q = 0; q < 4; ++q) {
+    translation_x[u_index(q + 1)] = 1.0;
+    translation_y[v_index(q + 1)] = 1.0;
+    rotation[u_index(q + 1)] = -ys[q];
+    rotation[v_index(q + 1)] = xs[q];
+  }
+  const double scale = k.cwiseAbs().maxCoeff();
+  EXPECT_LE((k * translation_x).cwiseAbs().maxCoeff(), 1e-13 * scale);
+  EXPECT_LE((k * translation_y).cwiseAbs().maxCoeff(), 1e-13 * scale);
+  EXPECT_LE((k * rotation).cwiseAbs().maxCoeff(), 1e-13 * scale * rect.width);
+}
+
+TEST(Element, PaperTypoInA22IsNotReproduced) {
+  // The paper prints A22(4,4) = mu tau/(6h) - (lambda+2mu) h/(3 tau); symmetry of the bilinear
+  // form requires mu tau/(3h) + (lambda+2mu) h/(3 tau), like the other diagonal entries.
+  const Rectangle rect{1.0, 2.0};
+  const LameConstants lame{3.0, 1.0};
+  const ElementMatrix k = closed_form_stiffness(rect, lame);
+  const double expected = lame.mu * rect.height / (3 * rect.width) +
+                          (lame.lambda + 2 * lame.mu) * rect.width / (3 * rect.height);
+  EXPECT_DOUBLE_EQ(k(v_index(4), v_index(4)), expected);
+  EXPECT_DOUBLE_EQ(k(v_index(4), v_index(4)), k(v_index(1), v_index(1)));
+}
