@@ -1,0 +1,73 @@
+#pragma once
+// Global assembly straight into a compressed-sparse-column pattern that is fixed for the
+// life of a mesh: the pattern is built once, every element knows where its 64 entries go,
+// and a Newton iteration only rewrites values (no allocation, no search).
+#include <cstdint>
+#include <vector>
+
+#include "indentsim/element.hpp"
+#include "indentsim/material.hpp"
+#include "indentsim/mesh.hpp"
+
+namespace indentsim {
+
+class StiffnessPattern {
+public:
+  explicit StiffnessPattern(const Mesh& mesh);
+
+  std::int64_t size() const { return size_; }
+  std::int64_t nonzeros() const { return static_cast<std::int64_t>(row_index_.size()); }
+  const std::vector<std::int64_t>& column_start() const { return column_start_; }
+  const std::vector<std::int64_t>& row_index() const { return row_index_; }
+
+  /// Position in the value array of local entry (a, b) of an element, or -1 when either
+  /// unknown is fixed by a Dirichlet condition.  64 entries per element, row-major.
+  const std::int32_t* element_positions(int element) const { return &element_position_[64 * static_cast<std::size_t>(element)]; }
+  std::int64_t diagonal_position(int equation) const { return diagonal_[equation]; }
+  /// Positions of every stored entry of row `equation` (the pattern is symmetric).
+  std::vector<std::int64_t> row_positions(int equation) const;
+
+  /// values[p] += ke(a, b) at the element's positions.
+  void scatter(int element, const ElementMatrix& ke, std::vector<double>& values) const;
+  /// y = A x for a matrix with this pattern.
+  void multiply(const std::vector<double>& values, const double* x, double* y) const;
+
+private:
+  std::int64_t size_ = 0;
+  std::vector<std::int64_t> column_start_, row_index_, diagonal_;
+  std::vector<std::int32_t> element_position_;
+};
+
+/// Gathers an element's 8 unknowns (paper order) from the vector of free equations.
+ElementVector gather(const Mesh& mesh, int ei, int ej, const double* u);
+
+/// Where the current element matrices come from: the elastic cache, or (for plastic models)
+/// the secant matrices of the current state.
+class ElementMatrixSource {
+public:
+  virtual ~ElementMatrixSource() = default;
+  virtual ElementMatrix element_matrix(int ei, int ej) const = 0;
+};
+
+/// Linear elasticity on the mesh: one closed-form matrix per pair of element size classes
+/// (a graded tensor mesh has few distinct rectangles), and the assembled stiffness K.
+class ElasticStiffness : public ElementMatrixSource {
+public:
+  ElasticStiffness(const Mesh& mesh, const ElasticMaterial& material, const StiffnessPattern& pattern);
+
+  ElementMatrix element_matrix(int ei, int ej) const override;
+  const ElementMatrix& cached_matrix(int ei, int ej) const {
+    return by_class_[mesh_.width_class(ei) * mesh_.height_classes() + mesh_.height_class(ej)];
+  }
+  const std::vector<double>& values() const { return values_; }
+  /// f = K u
+  void internal_force(const double* u, double* f) const { pattern_.multiply(values_, u, f); }
+
+private:
+  const Mesh& mesh_;
+  const StiffnessPattern& pattern_;
+  std::vector<ElementMatrix, Eigen::aligned_allocator<ElementMatrix>> by_class_;
+  std::vector<double> values_;
+};
+
+}  // namespace indentsim

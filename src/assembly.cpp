@@ -1,0 +1,121 @@
+#include "indentsim/assembly.hpp"
+
+#include <algorithm>
+#include <limits>
+#include <stdexcept>
+
+namespace indentsim {
+
+StiffnessPattern::StiffnessPattern(const Mesh& mesh) : size_(mesh.equations()) {
+  // Column lists: each free unknown couples to the free unknowns of the (up to 4) elements
+  // around its node.  Collect, sort, deduplicate per column.
+  std::vector<std::vector<std::int64_t>> columns(static_cast<std::size_t>(size_));
+  for (auto& c : columns) c.reserve(18);
+  for (int ei = 0; ei < mesh.elements_x(); ++ei)
+    for (int ej = 0; ej < mesh.elements_y(); ++ej) {
+      const auto dofs = mesh.element_dofs(ei, ej);
+      for (int b = 0; b < 8; ++b) {
+        const int col = mesh.equation(dofs[b]);
+        if (col < 0) continue;
+        for (int a = 0; a < 8; ++a) {
+          const int row = mesh.equation(dofs[a]);
+          if (row >= 0) columns[col].push_back(row);
+        }
+      }
+    }
+  column_start_.assign(static_cast<std::size_t>(size_) + 1, 0);
+  for (std::int64_t c = 0; c < size_; ++c) {
+    auto& rows = columns[c];
+    std::sort(rows.begin(), rows.end());
+    rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
+    column_start_[c + 1] = column_start_[c] + static_cast<std::int64_t>(rows.size());
+  }
+  if (column_start_.back() > std::numeric_limits<std::int32_t>::max())
+    throw std::length_error("stiffness pattern exceeds 2^31 entries");
+  row_index_.reserve(static_cast<std::size_t>(column_start_.back()));
+  diagonal_.assign(static_cast<std::size_t>(size_), -1);
+  for (std::int64_t c = 0; c < size_; ++c) {
+    for (std::int64_t r : columns[c]) {
+      if (r == c) diagonal_[c] = static_cast<std::int64_t>(row_index_.size());
+      row_index_.push_back(r);
+    }
+    std::vector<std::int64_t>().swap(columns[c]);
+  }
+
+  element_position_.assign(64 * static_cast<std::size_t>(mesh.elements()), -1);
+  for (int ei = 0; ei < mesh.elements_x(); ++ei)
+    for (int ej = 0; ej < mesh.elements_y(); ++ej) {
+      const auto dofs = mesh.element_dofs(ei, ej);
+      std::int32_t* pos = &element_position_[64 * static_cast<std::size_t>(mesh.element(ei, ej))];
+      for (int a = 0; a < 8; ++a) {
+        const int row = mesh.equation(dofs[a]);
+        if (row < 0) continue;
+        for (int b = 0; b < 8; ++b) {
+          const int col = mesh.equation(dofs[b]);
+          if (col < 0) continue;
+          const auto first = row_index_.begin() + column_start_[col];
+          const auto last = row_index_.begin() + column_start_[col + 1];
+          pos[8 * a + b] = static_cast<std::int32_t>(std::lower_bound(first, last, row) - row_index_.begin());
+        }
+      }
+    }
+}
+
+std::vector<std::int64_t> StiffnessPattern::row_positions(int equation) const {
+  std::vector<std::int64_t> positions;
+  // Symmetric pattern: the columns holding row `equation` are the rows of column `equation`.
+  for (std::int64_t p = column_start_[equation]; p < column_start_[equation + 1]; ++p) {
+    const std::int64_t col = row_index_[p];
+    const auto first = row_index_.begin() + column_start_[col];
+    const auto last = row_index_.begin() + column_start_[col + 1];
+    positions.push_back(std::lower_bound(first, last, equation) - row_index_.begin());
+  }
+  return positions;
+}
+
+void StiffnessPattern::scatter(int element, const ElementMatrix& ke, std::vector<double>& values) const {
+  const std::int32_t* pos = element_positions(element);
+  for (int a = 0; a < 8; ++a)
+    for (int b = 0; b < 8; ++b)
+      if (pos[8 * a + b] >= 0) values[pos[8 * a + b]] += ke(a, b);
+}
+
+void StiffnessPattern::multiply(const std::vector<double>& values, const double* x, double* y) const {
+  std::fill(y, y + size_, 0.0);
+  for (std::int64_t c = 0; c < size_; ++c) {
+    const double xc = x[c];
+    for (std::int64_t p = column_start_[c]; p < column_start_[c + 1]; ++p) y[row_index_[p]] += values[p] * xc;
+  }
+}
+
+ElementVector gather(const Mesh& mesh, int ei, int ej, const double* u) {
+  const auto dofs = mesh.element_dofs(ei, ej);
+  ElementVector ue;
+  for (int a = 0; a < 8; ++a) {
+    const int eq = mesh.equation(dofs[a]);
+    ue[a] = eq < 0 ? 0.0 : u[eq];
+  }
+  return ue;
+}
+
+ElasticStiffness::ElasticStiffness(const Mesh& mesh, const ElasticMaterial& material,
+                                   const StiffnessPattern& pattern)
+    : mesh_(mesh), pattern_(pattern) {
+  // One representative rectangle per (width class, height class).
+  std::vector<double> widths(mesh.width_classes()), heights(mesh.height_classes());
+  for (int ei = 0; ei < mesh.elements_x(); ++ei) widths[mesh.width_class(ei)] = mesh.rectangle(ei, 0).width;
+  for (int ej = 0; ej < mesh.elements_y(); ++ej) heights[mesh.height_class(ej)] = mesh.rectangle(0, ej).height;
+  const LameConstants lame = material.lame();
+  by_class_.resize(static_cast<std::size_t>(mesh.width_classes()) * mesh.height_classes());
+  for (int w = 0; w < mesh.width_classes(); ++w)
+    for (int h = 0; h < mesh.height_classes(); ++h)
+      by_class_[w * mesh.height_classes() + h] = closed_form_stiffness({widths[w], heights[h]}, lame);
+
+  values_.assign(static_cast<std::size_t>(pattern.nonzeros()), 0.0);
+  for (int ei = 0; ei < mesh.elements_x(); ++ei)
+    for (int ej = 0; ej < mesh.elements_y(); ++ej) pattern.scatter(mesh.element(ei, ej), cached_matrix(ei, ej), values_);
+}
+
+ElementMatrix ElasticStiffness::element_matrix(int ei, int ej) const { return cached_matrix(ei, ej); }
+
+}  // namespace indentsim

@@ -1,0 +1,197 @@
+#include "indentsim/mesh.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <unistd.h>
+
+#include <fmt/format.h>
+
+#include "indentsim/error.hpp"
+#include "indentsim/hertz.hpp"
+#include "indentsim/material.hpp"
+
+namespace indentsim {
+
+namespace {
+
+struct AxisLayout {
+  std::int64_t fine_elements = 0;
+  double spacing = 0.0;  // uniform spacing actually used in the fine zone
+  double fine_length = 0.0;
+  std::int64_t graded_elements = 0;
+  double ratio = 1.0;  // growth ratio actually used (<= requested)
+  bool graded_uniform = false;
+  double graded_uniform_size = 0.0;
+};
+
+AxisLayout layout_axis(double length, double fine_length, double spacing, double growth) {
+  AxisLayout a;
+  a.fine_length = std::min(fine_length, length);
+  const double fine_count = std::ceil(a.fine_length / spacing - 1e-9);
+  if (!(fine_count < 1e12)) throw std::length_error("axis has too many elements");
+  a.fine_elements = std::max<std::int64_t>(1, static_cast<std::int64_t>(fine_count));
+  a.spacing = a.fine_length / static_cast<double>(a.fine_elements);
+  const double rest = length - a.fine_length;
+  if (rest <= 1e-12 * length) return a;
+
+  const double h = a.spacing;
+  if (growth <= 1.0 + 1e-12) {
+    a.graded_elements = std::max<std::int64_t>(1, static_cast<std::int64_t>(std::ceil(rest / h - 1e-9)));
+    a.graded_uniform = true;
+    a.graded_uniform_size = rest / static_cast<double>(a.graded_elements);
+    return a;
+  }
+  // Sizes h r, h r^2, ..., h r^m with h r (r^m - 1)/(r - 1) >= rest.
+  const double m = std::ceil(std::log1p(rest * (growth - 1.0) / (h * growth)) / std::log(growth) - 1e-9);
+  a.graded_elements = std::max<std::int64_t>(1, static_cast<std::int64_t>(m));
+  const auto count = static_cast<double>(a.graded_elements);
+  if (h * count >= rest) {
+    a.graded_uniform = true;
+    a.graded_uniform_size = rest / count;
+    return a;
+  }
+  // Solve h sum_{k=1..m} r^k = rest for r in (1, growth] so that the last element closes exactly.
+  const auto series = [&](double r) { return h * r * (std::pow(r, count) - 1.0) / (r - 1.0); };
+  double lo = 1.0 + 1e-15, hi = growth;
+  for (int it = 0; it < 200 && hi - lo > 1e-15; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (series(mid) < rest ? lo : hi) = mid;
+  }
+  a.ratio = hi;
+  return a;
+}
+
+std::vector<int> classify_sizes(const std::vector<double>& coords, int& classes) {
+  std::vector<int> cls(coords.size() - 1);
+  std::vector<double> representatives;
+  for (std::size_t e = 0; e + 1 < coords.size(); ++e) {
+    const double size = coords[e + 1] - coords[e];
+    int found = -1;
+    // Sizes come in runs (uniform zone) and then grow, so look at recent classes first.
+    for (int c = static_cast<int>(representatives.size()) - 1; c >= 0; --c)
+      if (std::abs(representatives[c] - size) <= 1e-10 * size) {
+        found = c;
+        break;
+      }
+    if (found < 0) {
+      found = static_cast<int>(representatives.size());
+      representatives.push_back(size);
+    }
+    cls[e] = found;
+  }
+  classes = static_cast<int>(representatives.size());
+  return cls;
+}
+
+}  // namespace
+
+std::vector<double> graded_axis(double length, double fine_length, double spacing, double growth) {
+  const AxisLayout a = layout_axis(length, fine_length, spacing, growth);
+  std::vector<double> x;
+  x.reserve(static_cast<std::size_t>(a.fine_elements + a.graded_elements + 1));
+  for (std::int64_t i = 0; i <= a.fine_elements; ++i) x.push_back(static_cast<double>(i) * a.spacing);
+  x.back() = a.fine_length;
+  double size = a.spacing;
+  for (std::int64_t k = 1; k <= a.graded_elements; ++k) {
+    size = a.graded_uniform ? a.graded_uniform_size : size * a.ratio;
+    x.push_back(x.back() + size);
+  }
+  x.back() = length;
+  return x;
+}
+
+std::int64_t graded_axis_count(double length, double fine_length, double spacing, double growth) {
+  const AxisLayout a = layout_axis(length, fine_length, spacing, growth);
+  return a.fine_elements + a.graded_elements + 1;
+}
+
+double default_growth(int contact_nodes) {
+  return std::clamp(1.0 + 2.5 / static_cast<double>(contact_nodes), 1.02, 1.5);
+}
+
+double MeshPlan::estimated_bytes() const {
+  const double n = static_cast<double>(unknowns());
+  const double elements = static_cast<double>((nodes_x - 1) * (nodes_y - 1));
+  // Matrix pattern and values (~18 entries per row, a few copies), element positions
+  // (64 int32 per element), sparse LU factors of a 2-D grid (~12 n log2 n entries with
+  // their indices) and a dozen vectors.
+  return n * 18.0 * 12.0 * 3.0 + elements * 64.0 * 4.0 + 12.0 * n * std::log2(std::max(2.0, n)) * 12.0 +
+         n * 8.0 * 12.0;
+}
+
+MeshPlan plan_mesh(const LoadCase& lc) {
+  const auto& m = lc.mesh;
+  MeshPlan plan;
+  plan.contact_half_width_estimate =
+      m.contact_half_width.value_or(hertz::estimate_half_width(lc.max_depth(), lc.punch.radius, lc.geometry.ly,
+                                                               lc.material.nu));
+  const double a_star = plan.contact_half_width_estimate;
+  plan.fine_spacing = a_star / static_cast<double>(m.contact_nodes);
+  // The fine zone holds the contact with a margin for the estimate, and the layer below it
+  // where the Hertz stresses are largest (max shear at depth 0.78 a).
+  plan.fine_width = std::min(lc.geometry.lx, m.fine_width.value_or(1.5 * a_star));
+  plan.fine_depth = std::min(lc.geometry.ly, m.fine_depth.value_or(1.5 * a_star));
+  plan.growth = m.growth.value_or(default_growth(m.contact_nodes));
+  const std::string size_key = m.contact_half_width ? "mesh.contact_half_width" : "mesh.contact_nodes";
+  if (!(plan.fine_spacing > 0.0))
+    throw InputError(lc.source, size_key, "gives a zero mesh spacing");
+  const double limit_per_axis = 1e8;
+  if (plan.fine_width / plan.fine_spacing > limit_per_axis || plan.fine_depth / plan.fine_spacing > limit_per_axis)
+    throw InputError(lc.source, size_key,
+                     fmt::format("asks for a fine spacing of {:.3g} m: more than 1e8 elements along an edge",
+                                 plan.fine_spacing));
+  try {
+    plan.nodes_x = graded_axis_count(lc.geometry.lx, plan.fine_width, plan.fine_spacing, plan.growth);
+    plan.nodes_y = graded_axis_count(lc.geometry.ly, plan.fine_depth, plan.fine_spacing, plan.growth);
+  } catch (const std::length_error&) {
+    throw InputError(lc.source, size_key, "gives a mesh with too many elements");
+  }
+
+  const double pages = static_cast<double>(sysconf(_SC_PHYS_PAGES));
+  const double page_size = static_cast<double>(sysconf(_SC_PAGE_SIZE));
+  const double memory = pages > 0 && page_size > 0 ? pages * page_size : 8.0 * (1ull << 30);
+  const double needed = plan.estimated_bytes();
+  const double nnz_estimate = 18.0 * static_cast<double>(plan.unknowns());
+  if (needed > 0.75 * memory || nnz_estimate > 2.0e9)
+    throw InputError(lc.source, size_key,
+                     fmt::format("the mesh would have {} x {} nodes ({} unknowns) and need about {:.1f} GiB, "
+                                 "more than this machine can hold ({:.1f} GiB); lower contact_nodes",
+                                 plan.nodes_x, plan.nodes_y, plan.unknowns(), needed / (1ull << 30),
+                                 memory / (1ull << 30)));
+  return plan;
+}
+
+Mesh Mesh::from_plan(const LoadCase& lc, const MeshPlan& plan) {
+  std::vector<double> x = graded_axis(lc.geometry.lx, plan.fine_width, plan.fine_spacing, plan.growth);
+  std::vector<double> depth = graded_axis(lc.geometry.ly, plan.fine_depth, plan.fine_spacing, plan.growth);
+  std::vector<double> y(depth.size());
+  for (std::size_t k = 0; k < depth.size(); ++k) y[k] = -depth[depth.size() - 1 - k];
+  y.back() = 0.0;
+  y.front() = -lc.geometry.ly;
+  return Mesh(std::move(x), std::move(y));
+}
+
+Mesh::Mesh(std::vector<double> x, std::vector<double> y) : x_(std::move(x)), y_(std::move(y)) {
+  if (x_.size() < 2 || y_.size() < 2) throw std::invalid_argument("a mesh needs at least 2 nodes per axis");
+  equation_.assign(2 * static_cast<std::size_t>(nodes()), -1);
+  for (int i = 0; i < nodes_x(); ++i)
+    for (int j = 0; j < nodes_y(); ++j) {
+      const int n = node(i, j);
+      const bool base = (j == 0);
+      const bool axis = (i == 0);
+      if (!base && !axis) equation_[dof_u(n)] = equations_++;
+      if (!base) equation_[dof_v(n)] = equations_++;
+    }
+  width_class_ = classify_sizes(x_, width_classes_);
+  height_class_ = classify_sizes(y_, height_classes_);
+}
+
+std::array<int, 8> Mesh::element_dofs(int ei, int ej) const {
+  const auto n = element_nodes(ei, ej);
+  return {dof_u(n[0]), dof_u(n[1]), dof_u(n[2]), dof_u(n[3]),
+          dof_v(n[0]), dof_v(n[1]), dof_v(n[2]), dof_v(n[3])};
+}
+
+}  // namespace indentsim
