@@ -1,0 +1,82 @@
+#pragma once
+// One increment of the load path: the semi-smooth Newton solve of F(u; alpha) = 0 driven by
+// SUNDIALS KINSOL with the SuiteSparse KLU sparse direct solver (SUNLinSol_KLU).
+//
+// The SUNDIALS objects (context, vectors, matrix, linear solver, KINSOL memory) are owned by
+// RAII handles inside NewtonSolver (src/sundials_handles.hpp); this header does not expose them.
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "indentsim/assembly.hpp"
+#include "indentsim/contact.hpp"
+
+namespace indentsim {
+
+/// The discrete equations of one increment and their generalized Jacobian.
+class IncrementEquations {
+public:
+  virtual ~IncrementEquations() = default;
+  virtual const StiffnessPattern& pattern() const = 0;
+  std::int64_t size() const { return pattern().size(); }
+  /// F(u; alpha).
+  virtual void residual(const double* u, double alpha, double* f) = 0;
+  /// Values of the Jacobian dF/du at u, in the fixed pattern.
+  virtual void jacobian(const double* u, double alpha, double* values) = 0;
+};
+
+/// Linear elasticity with Signorini contact: F = K u, with the contact rows replaced by the
+/// complementarity function of ContactBoundary.
+class ElasticContactEquations : public IncrementEquations {
+public:
+  ElasticContactEquations(const StiffnessPattern& pattern, const ElasticStiffness& stiffness,
+                          const ContactBoundary& contact);
+  const StiffnessPattern& pattern() const override { return pattern_; }
+  void residual(const double* u, double alpha, double* f) override;
+  void jacobian(const double* u, double alpha, double* values) override;
+
+private:
+  const StiffnessPattern& pattern_;
+  const ElasticStiffness& stiffness_;
+  const ContactBoundary& contact_;
+  std::vector<std::vector<std::int64_t>> contact_rows_;  // value positions of each candidate's row
+  std::vector<double> internal_force_;                    // scratch, sized once
+};
+
+struct NewtonSettings {
+  double displacement_scale = 1.0;  ///< typical |u| [m] (KINSOL's uscale = 1/this)
+  double force_scale = 1.0;         ///< typical |F| [N/m] (KINSOL's fscale = 1/this)
+  double tolerance = 1e-11;         ///< on max |F| / force_scale
+  int max_iterations = 50;
+};
+
+struct NewtonReport {
+  bool converged = false;
+  long iterations = 0;
+  long factorizations = 0;      ///< numeric LU factorizations (KLU factor or refactor)
+  long symbolic_analyses = 0;   ///< KLU symbolic analyses (ideally one per mesh)
+  double residual = 0.0;        ///< max |F| / force_scale at the returned u
+  int kinsol_flag = 0;
+  std::string message;          ///< KINSOL's own words when it failed
+};
+
+class NewtonSolver {
+public:
+  NewtonSolver(IncrementEquations& equations, const NewtonSettings& settings);
+  ~NewtonSolver();
+  NewtonSolver(const NewtonSolver&) = delete;
+  NewtonSolver& operator=(const NewtonSolver&) = delete;
+
+  /// Solves F(u; alpha) = 0 starting from u (the predictor), leaving the last iterate in u.
+  NewtonReport solve(double alpha, std::vector<double>& u);
+
+  long total_factorizations() const;
+  long total_symbolic_analyses() const;
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace indentsim
