@@ -1,0 +1,70 @@
+#pragma once
+// A run, from load case to P-alpha curve: plans and builds the mesh, assembles the elastic
+// stiffness, sets up contact and the Newton solver, and steps the depth along the load path.
+// The CLI is a thin layer over this class; the tests drive it directly.
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "indentsim/assembly.hpp"
+#include "indentsim/contact.hpp"
+#include "indentsim/layer_forces.hpp"
+#include "indentsim/load_case.hpp"
+#include "indentsim/load_stepping.hpp"
+#include "indentsim/mesh.hpp"
+#include "indentsim/solver.hpp"
+
+namespace indentsim {
+
+class Simulation {
+public:
+  /// Throws InputError when the load case asks for a model not available or a mesh too large.
+  explicit Simulation(LoadCase load_case);
+  ~Simulation();
+
+  const LoadCase& load_case() const { return load_case_; }
+  const MeshPlan& plan() const { return plan_; }
+  const Mesh& mesh() const { return *mesh_; }
+  const ContactBoundary& contact_boundary() const { return *contact_; }
+  const ElementMatrixSource& element_matrices() const { return *stiffness_; }
+
+  /// Steps the whole load path, calling `on_increment` after every converged increment (the
+  /// initial state alpha = 0 included).  Throws SolverError when an increment cannot converge
+  /// within the allowed cutbacks; the increments reported before stay valid.
+  void run(const std::function<void(const IncrementRecord&)>& on_increment = {});
+
+  /// Solves one increment from the current state to depth `alpha` (with cutbacks).
+  IncrementRecord advance_to(double alpha);
+
+  double alpha() const { return alpha_; }
+  const std::vector<double>& displacement() const { return u_; }
+  ContactResult contact() const;
+  double contact_half_width() const;
+  std::vector<LayerForce> layer_forces() const;
+  long symbolic_analyses() const { return newton_->total_symbolic_analyses(); }
+  /// Warnings raised so far (each once), e.g. a contact zone that left the fine zone.
+  const std::vector<std::string>& warnings() const { return warnings_; }
+
+private:
+  IncrementRecord record(double wall_seconds, long iterations, long factorizations, int cutbacks);
+  void check_fine_zone(double half_width);
+
+  LoadCase load_case_;
+  MeshPlan plan_;
+  std::unique_ptr<Mesh> mesh_;
+  std::unique_ptr<StiffnessPattern> pattern_;
+  std::unique_ptr<ElasticStiffness> stiffness_;
+  std::unique_ptr<ContactBoundary> contact_;
+  std::unique_ptr<ElasticContactEquations> equations_;
+  std::unique_ptr<NewtonSolver> newton_;
+
+  double alpha_ = 0.0, alpha_previous_ = 0.0;
+  std::vector<double> u_, u_previous_, guess_;
+  bool has_previous_ = false;
+  int rows_ = 0;
+  std::vector<std::string> warnings_;
+  bool warned_fine_zone_ = false;
+};
+
+}  // namespace indentsim

@@ -1,0 +1,54 @@
+#include "indentsim/load_stepping.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace indentsim {
+
+std::vector<double> plan_increments(const std::vector<double>& path, int increments) {
+  const std::size_t segments = path.size() - 1;
+  std::vector<double> length(segments);
+  std::vector<int> count(segments, 0);
+  for (std::size_t s = 0; s < segments; ++s) length[s] = std::abs(path[s + 1] - path[s]);
+  const double total = std::accumulate(length.begin(), length.end(), 0.0);
+  const std::size_t nonempty =
+      static_cast<std::size_t>(std::count_if(length.begin(), length.end(), [](double l) { return l > 0.0; }));
+  const int n = std::max(increments, static_cast<int>(nonempty));
+  std::vector<double> remainder(segments, -1.0);
+  int assigned = 0;
+  for (std::size_t s = 0; s < segments; ++s) {
+    if (length[s] <= 0.0) continue;
+    const double share = n * length[s] / total;
+    count[s] = std::max(1, static_cast<int>(std::floor(share)));
+    remainder[s] = share - std::floor(share);
+    assigned += count[s];
+  }
+  while (assigned < n) {
+    const auto s = static_cast<std::size_t>(std::max_element(remainder.begin(), remainder.end()) - remainder.begin());
+    ++count[s];
+    remainder[s] = -1.0;
+    ++assigned;
+  }
+  while (assigned > n) {  // only when the "at least one" rule overshot: take from the largest
+    const auto s = static_cast<std::size_t>(std::max_element(count.begin(), count.end()) - count.begin());
+    --count[s];
+    --assigned;
+  }
+  std::vector<double> alphas{path.front()};
+  for (std::size_t s = 0; s < segments; ++s)
+    for (int k = 1; k <= count[s]; ++k)
+      alphas.push_back(k == count[s] ? path[s + 1] : path[s] + (path[s + 1] - path[s]) * k / count[s]);
+  return alphas;
+}
+
+void extrapolate(const std::vector<double>& u_previous, double alpha_previous, const std::vector<double>& u_current,
+                 double alpha_current, double alpha_next, std::vector<double>& guess) {
+  guess = u_current;
+  const double span = alpha_current - alpha_previous;
+  if (span == 0.0 || u_previous.size() != u_current.size()) return;
+  const double t = (alpha_next - alpha_current) / span;
+  for (std::size_t i = 0; i < guess.size(); ++i) guess[i] += t * (u_current[i] - u_previous[i]);
+}
+
+}  // namespace indentsim
