@@ -1,0 +1,135 @@
+// Reading load cases: the fixed keys, overrides, and every kind of bad input named precisely.
+#include <gtest/gtest.h>
+
+#include "indentsim/error.hpp"
+#include "indentsim/load_case.hpp"
+#include "indentsim/mesh.hpp"
+#include "test_support.hpp"
+
+using namespace indentsim;
+
+namespace {
+
+const char* valid_case = R"(
+[geometry]
+lx = 15e-3
+ly = 10e-3
+[punch]
+radius = 2e-3
+[material]
+model = "elastic"
+E = 210e9
+nu = 0.3
+[load]
+path = [0.0, 5e-5]
+increments = 10
+)";
+
+// Parses `text` and returns the InputError's key, or "" if it parsed.
+std::string rejected_key(const std::string& text, const std::vector<std::string>& overrides = {}) {
+  try {
+    parse_load_case(text, "case.toml", overrides);
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), "case.toml");
+    EXPECT_FALSE(e.problem().empty());
+    return e.key();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(LoadCase, ShippedCasesAreValid) {
+  for (const char* name : {"elastic.toml", "hertz_thick_block.toml"}) {
+    SCOPED_TRACE(name);
+    EXPECT_NO_THROW(indentsim::testing::shipped_case(name));
+  }
+}
+
+TEST(LoadCase, ReadsFixedKeysInSIUnits) {
+  const LoadCase lc = parse_load_case(valid_case, "case.toml");
+  EXPECT_DOUBLE_EQ(lc.geometry.lx, 15e-3);
+  EXPECT_DOUBLE_EQ(lc.punch.radius, 2e-3);
+  EXPECT_EQ(lc.material.model, MaterialModel::elastic);
+  EXPECT_DOUBLE_EQ(lc.material.E, 210e9);
+  EXPECT_EQ(lc.load.increments, 10);
+  EXPECT_EQ(lc.mesh.contact_nodes, 20);  // default
+  EXPECT_DOUBLE_EQ(lc.max_depth(), 5e-5);
+}
+
+TEST(LoadCase, OverridesAreTomlValuesOrBareStrings) {
+  const LoadCase lc = parse_load_case(valid_case, "case.toml",
+                                      {"material.E=70e9", "load.path=[0, 1e-5, 2e-5]", "mesh.contact_nodes=12",
+                                       "output.dir=results/run1", "mesh.growth=1.2"});
+  EXPECT_DOUBLE_EQ(lc.material.E, 70e9);
+  ASSERT_EQ(lc.load.path.size(), 3u);
+  EXPECT_DOUBLE_EQ(lc.load.path[2], 2e-5);
+  EXPECT_EQ(lc.mesh.contact_nodes, 12);
+  EXPECT_EQ(lc.output.dir, "results/run1");
+  ASSERT_TRUE(lc.mesh.growth.has_value());
+  EXPECT_DOUBLE_EQ(*lc.mesh.growth, 1.2);
+}
+
+TEST(LoadCase, IntegersAreAcceptedWhereNumbersAreExpected) {
+  const LoadCase lc = parse_load_case(valid_case, "case.toml", {"material.E=210000000000"});
+  EXPECT_DOUBLE_EQ(lc.material.E, 210e9);
+}
+
+TEST(LoadCase, BadInputNamesTheKey) {
+  const std::string v = valid_case;
+  EXPECT_EQ(rejected_key(v + "\n[extra]\nx = 1\n"), "extra");                      // unknown section
+  EXPECT_EQ(rejected_key(v, {"geometry.lz=1"}), "geometry.lz");                    // unknown key
+  EXPECT_EQ(rejected_key(v, {"material.E=\"steel\""}), "material.E");              // wrong type
+  EXPECT_EQ(rejected_key(v, {"load.increments=2.5"}), "load.increments");          // not an integer
+  EXPECT_EQ(rejected_key(v, {"load.path=5e-5"}), "load.path");                     // not an array
+  EXPECT_EQ(rejected_key(v, {"load.path=[0, \"deep\"]"}), "load.path");
+  EXPECT_EQ(rejected_key(v, {"material.E=0"}), "material.E");                      // E <= 0
+  EXPECT_EQ(rejected_key(v, {"material.E=-1e9"}), "material.E");
+  EXPECT_EQ(rejected_key(v, {"material.nu=0.5"}), "material.nu");                  // nu outside (-1, 0.5)
+  EXPECT_EQ(rejected_key(v, {"material.nu=-1"}), "material.nu");
+  EXPECT_EQ(rejected_key(v, {"material.nu=nan"}), "material.nu");
+  EXPECT_EQ(rejected_key(v, {"punch.radius=0"}), "punch.radius");                  // R <= 0
+  EXPECT_EQ(rejected_key(v, {"load.path=[0, -1e-5]"}), "load.path");              // negative depth
+  EXPECT_EQ(rejected_key(v, {"load.path=[1e-5, 2e-5]"}), "load.path");             // not from 0
+  EXPECT_EQ(rejected_key(v, {"load.path=[0, 3e-3]"}), "load.path");                // deeper than R
+  EXPECT_EQ(rejected_key(v, {"load.increments=0"}), "load.increments");            // zero increments
+  EXPECT_EQ(rejected_key(v, {"material.model=plastic"}), "material.model");
+  EXPECT_EQ(rejected_key(v, {"mesh.contact_nodes=1"}), "mesh.contact_nodes");
+  EXPECT_EQ(rejected_key(v, {"mesh.growth=3"}), "mesh.growth");
+  EXPECT_EQ(rejected_key(v, {"geometry=3"}), "geometry");
+  EXPECT_EQ(rejected_key(v, {"nodot=3"}), "nodot");
+}
+
+TEST(LoadCase, MissingKeysAndSectionsAreNamed) {
+  std::string no_radius = valid_case;
+  no_radius.replace(no_radius.find("radius = 2e-3"), 13, "");
+  EXPECT_EQ(rejected_key(no_radius), "punch.radius");
+  std::string no_load = valid_case;
+  no_load.erase(no_load.find("[load]"));
+  EXPECT_EQ(rejected_key(no_load), "load");
+}
+
+TEST(LoadCase, SyntaxErrorsGiveLineAndColumn) {
+  try {
+    parse_load_case("[geometry]\nlx = = 1\n", "broken.toml");
+    FAIL() << "accepted broken TOML";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), "broken.toml");
+    EXPECT_NE(e.key().find("line 2"), std::string::npos) << e.key();
+  }
+}
+
+TEST(LoadCase, MissingFileIsAnInputError) {
+  EXPECT_THROW(read_load_case("/nonexistent/indentsim/case.toml"), InputError);
+}
+
+TEST(LoadCase, MeshTooLargeForMemoryIsRejectedBeforeAllocation) {
+  const LoadCase lc = parse_load_case(valid_case, "case.toml", {"mesh.contact_nodes=200000"});
+  try {
+    plan_mesh(lc);
+    FAIL() << "planned an enormous mesh";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.key(), "mesh.contact_nodes");
+    EXPECT_NE(e.problem().find("GiB"), std::string::npos) << e.problem();
+  }
+}

@@ -1,0 +1,92 @@
+// Uniform-compression patch test on a graded mesh, solved through the same KINSOL + KLU
+// path as the contact problem: the exact linear field must come back to round-off.
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "indentsim/assembly.hpp"
+#include "indentsim/mesh.hpp"
+#include "indentsim/solver.hpp"
+
+using namespace indentsim;
+
+namespace {
+
+// K u - f = 0 for given nodal loads f.
+class LinearEquations : public IncrementEquations {
+public:
+  LinearEquations(const StiffnessPattern& p, const ElasticStiffness& k, std::vector<double> f)
+      : pattern_(p), stiffness_(k), load_(std::move(f)) {}
+  const StiffnessPattern& pattern() const override { return pattern_; }
+  void residual(const double* u, double, double* f) override {
+    stiffness_.internal_force(u, f);
+    for (std::size_t i = 0; i < load_.size(); ++i) f[i] -= load_[i];
+  }
+  void jacobian(const double*, double, double* values) override {
+    std::copy(stiffness_.values().begin(), stiffness_.values().end(), values);
+  }
+
+private:
+  const StiffnessPattern& pattern_;
+  const ElasticStiffness& stiffness_;
+  std::vector<double> load_;
+};
+
+}  // namespace
+
+TEST(PatchTest, UniformCompressionIsReproducedExactlyOnAGradedMesh) {
+  // u1 = 0, u2 = -eps (y + ly): satisfies the base clamp and the axis symmetry condition.
+  // Stresses: sigma22 = -(lambda + 2 mu) eps on top, sigma11 = -lambda eps on the side x = lx.
+  const double lx = 15e-3, ly = 10e-3, eps = 1e-3;
+  const Mesh mesh(graded_axis(lx, 2e-3, 2.5e-4, 1.3), [&] {
+    auto d = graded_axis(ly, 1e-3, 2e-4, 1.25);
+    std::vector<double> y(d.size());
+    for (std::size_t k = 0; k < d.size(); ++k) y[k] = -d[d.size() - 1 - k];
+    return y;
+  }());
+  const ElasticMaterial material{210e9, 0.3};
+  const LameConstants lame = material.lame();
+  const StiffnessPattern pattern(mesh);
+  const ElasticStiffness stiffness(mesh, material, pattern);
+
+  // Consistent nodal loads of the constant tractions: half an edge length to each end node.
+  std::vector<double> f(static_cast<std::size_t>(mesh.equations()), 0.0);
+  const double top_traction = -(lame.lambda + 2 * lame.mu) * eps;  // sigma22 n2 on y = 0
+  const double side_traction = -lame.lambda * eps;                  // sigma11 n1 on x = lx
+  for (int i = 0; i + 1 < mesh.nodes_x(); ++i) {
+    const double half = 0.5 * (mesh.x(i + 1) - mesh.x(i)) * top_traction;
+    for (int n : {mesh.node(i, mesh.top_row()), mesh.node(i + 1, mesh.top_row())}) {
+      const int eq = mesh.equation(Mesh::dof_v(n));
+      if (eq >= 0) f[eq] += half;
+    }
+  }
+  for (int j = 0; j + 1 < mesh.nodes_y(); ++j) {
+    const double half = 0.5 * (mesh.y(j + 1) - mesh.y(j)) * side_traction;
+    for (int n : {mesh.node(mesh.nodes_x() - 1, j), mesh.node(mesh.nodes_x() - 1, j + 1)}) {
+      const int eq = mesh.equation(Mesh::dof_u(n));
+      if (eq >= 0) f[eq] += half;
+    }
+  }
+
+  LinearEquations equations(pattern, stiffness, f);
+  NewtonSettings settings;
+  settings.displacement_scale = eps * ly;
+  settings.force_scale = material.E * eps * 1e-3;
+  settings.tolerance = 1e-12;
+  NewtonSolver solver(equations, settings);
+  std::vector<double> u(static_cast<std::size_t>(mesh.equations()), 0.0);
+  const NewtonReport report = solver.solve(0.0, u);
+  ASSERT_TRUE(report.converged) << report.message;
+  EXPECT_LE(report.iterations, 2);  // linear: one Newton step
+
+  double worst = 0;
+  for (int i = 0; i < mesh.nodes_x(); ++i)
+    for (int j = 0; j < mesh.nodes_y(); ++j) {
+      const int n = mesh.node(i, j);
+      const int eu = mesh.equation(Mesh::dof_u(n)), ev = mesh.equation(Mesh::dof_v(n));
+      const double exact_v = -eps * (mesh.y(j) + ly);
+      if (eu >= 0) worst = std::max(worst, std::abs(u[eu]));
+      if (ev >= 0) worst = std::max(worst, std::abs(u[ev] - exact_v));
+    }
+  EXPECT_LE(worst, 1e-12 * eps * ly);
+}
