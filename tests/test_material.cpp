@@ -1,0 +1,104 @@
+// Ilyushin's secant law: the consistent tangent against finite differences of the stress, the
+// uniaxial curve's post-yield slope, the elastic branch, and the admissibility check.
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "indentsim/material.hpp"
+
+using namespace indentsim;
+
+namespace {
+
+const ElasticMaterial steel{210e9, 0.3};
+
+// A strain of direction `direction` scaled to strain intensity `e_u`.
+VoigtVector strain_with_intensity(VoigtVector direction, double e_u) {
+  return direction * (e_u / strain_intensity(direction));
+}
+
+// Central differences of the secant stress, column by column.
+PlaneStrainMatrix finite_difference_tangent(const IlyushinLaw& law, const VoigtVector& strain) {
+  PlaneStrainMatrix fd;
+  const double step = 1e-7 * strain.norm();
+  for (int j = 0; j < 3; ++j) {
+    VoigtVector plus = strain, minus = strain;
+    plus[j] += step;
+    minus[j] -= step;
+    fd.col(j) = (law.respond(plus).stress - law.respond(minus).stress) / (2 * step);
+  }
+  return fd;
+}
+
+void expect_tangent_matches(const IlyushinLaw& law, double e0) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> component(-1.0, 1.0);
+  // Elastic, just yielded, moderately and deeply plastic.
+  for (double factor : {0.5, 1.02, 3.0, 50.0}) {
+    for (int trial = 0; trial < 50; ++trial) {
+      const VoigtVector strain =
+          strain_with_intensity(VoigtVector(component(rng), component(rng), component(rng)), factor * e0);
+      const SecantResponse r = law.respond(strain);
+      EXPECT_EQ(r.plastic, factor > 1.0);
+      const PlaneStrainMatrix fd = finite_difference_tangent(law, strain);
+      const double scale = r.tangent.cwiseAbs().maxCoeff();
+      EXPECT_LE((r.tangent - fd).cwiseAbs().maxCoeff(), 1e-6 * scale)
+          << "e_u / e0 = " << factor << "\ntangent\n" << r.tangent << "\nfinite differences\n" << fd;
+      EXPECT_LE((r.tangent - r.tangent.transpose()).cwiseAbs().maxCoeff(), 1e-12 * scale);
+    }
+  }
+}
+
+}  // namespace
+
+TEST(Ilyushin, StrainIntensityIsTheVonMisesEquivalentStrain) {
+  // sqrt(2/3 e:e) with the deviator of the 3-D strain (eps33 = 0).
+  const VoigtVector s(3e-3, -1e-3, 4e-3);
+  const double tr = s[0] + s[1];
+  const double e11 = s[0] - tr / 3, e22 = s[1] - tr / 3, e33 = -tr / 3, e12 = s[2] / 2;
+  const double expected = std::sqrt(2.0 / 3.0 * (e11 * e11 + e22 * e22 + e33 * e33 + 2 * e12 * e12));
+  EXPECT_NEAR(strain_intensity(s), expected, 1e-15);
+}
+
+TEST(Ilyushin, LinearLawTangentMatchesFiniteDifferences) {
+  expect_tangent_matches(IlyushinLaw(steel, 0.027, HardeningLaw::linear, 0.9, 0.3), 0.027);
+}
+
+TEST(Ilyushin, PowerLawTangentMatchesFiniteDifferences) {
+  expect_tangent_matches(IlyushinLaw(steel, 0.005, HardeningLaw::power, 0.9, 0.2), 0.005);
+}
+
+TEST(Ilyushin, ElasticBranchIsHookesLaw) {
+  const IlyushinLaw law(steel, 0.027, HardeningLaw::linear, 0.9, 0.3);
+  const VoigtVector strain = strain_with_intensity(VoigtVector(1, -0.3, 0.2), 0.02);
+  const SecantResponse r = law.respond(strain);
+  EXPECT_FALSE(r.plastic);
+  EXPECT_EQ(r.omega, 0.0);
+  EXPECT_LE((r.stress - steel.stiffness() * strain).norm(), 1e-12 * r.stress.norm());
+  EXPECT_LE((r.tangent - steel.stiffness()).cwiseAbs().maxCoeff(), 1e-3);
+}
+
+TEST(Ilyushin, UniaxialCurveHasThePostYieldSlopeOfTheLaw) {
+  // Linear law: d sigma_u / d e_u = (1 - kappa) 3 mu beyond e0 (MODEL.md).
+  const double kappa = 0.9, e0 = 0.027, mu = steel.lame().mu;
+  const IlyushinLaw law(steel, e0, HardeningLaw::linear, kappa, 0.3);
+  const double h = 1e-6;
+  for (double e_u : {1.5 * e0, 4 * e0, 30 * e0}) {
+    const double slope = (law.stress_intensity(e_u + h) - law.stress_intensity(e_u - h)) / (2 * h);
+    EXPECT_NEAR(slope, (1 - kappa) * 3 * mu, 1e-6 * 3 * mu);
+  }
+  // Power law: sigma_u ~ e_u^n beyond e0, continuous at e0.
+  const double n = 0.2;
+  const IlyushinLaw power(steel, e0, HardeningLaw::power, kappa, n);
+  EXPECT_NEAR(power.stress_intensity(e0), 3 * mu * e0, 1e-9 * 3 * mu * e0);
+  EXPECT_NEAR(power.stress_intensity(8 * e0) / power.stress_intensity(e0), std::pow(8.0, n), 1e-12);
+}
+
+TEST(Ilyushin, AdmissibilityHoldsForValidLawsAndCatchesABadOne) {
+  EXPECT_FALSE(IlyushinLaw(steel, 0.027, HardeningLaw::linear, 0.9, 0.3).admissibility_violation());
+  EXPECT_FALSE(IlyushinLaw(steel, 0.002, HardeningLaw::power, 0.9, 0.05).admissibility_violation());
+  EXPECT_FALSE(IlyushinLaw(steel, 0.002, HardeningLaw::linear, 0.0, 0.3).admissibility_violation());
+  // kappa = 1 is perfect plasticity: d(e_u omega)/de_u = 1, outside Ilyushin's conditions.
+  EXPECT_TRUE(IlyushinLaw(steel, 0.027, HardeningLaw::linear, 1.0, 0.3).admissibility_violation());
+}
