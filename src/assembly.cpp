@@ -118,4 +118,24 @@ ElasticStiffness::ElasticStiffness(const Mesh& mesh, const ElasticMaterial& mate
 
 ElementMatrix ElasticStiffness::element_matrix(int ei, int ej) const { return cached_matrix(ei, ej); }
 
+void ElasticStiffness::commit(const double* u) {
+  // Reported only (how close the elastic solution comes to a yield limit); no material law here.
+  double largest = 0.0;
+  for (int ei = 0; ei < mesh_.elements_x(); ++ei)
+    for (int ej = 0; ej < mesh_.elements_y(); ++ej)
+      for (const VoigtVector& strain : gauss_point_strains(mesh_, ei, ej, u))
+        largest = std::max(largest, strain_intensity(strain));
+  max_strain_intensity_ = largest;
+}
+
+std::array<VoigtVector, 4> gauss_point_strains(const Mesh& mesh, int ei, int ej, const double* u) {
+  const Rectangle rect = mesh.rectangle(ei, ej);
+  const ElementVector ue = gather(mesh, ei, ej, u);
+  const auto& points = gauss_points_2x2();
+  std::array<VoigtVector, 4> strains;
+  for (std::size_t g = 0; g < points.size(); ++g)
+    strains[g] = strain_displacement(rect, points[g].xi, points[g].eta) * ue;
+  return strains;
+}
+
 }  // namespace indentsim

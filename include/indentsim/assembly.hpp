@@ -2,6 +2,8 @@
 // Global assembly straight into a compressed-sparse-column pattern that is fixed for the
 // life of a mesh: the pattern is built once, every element knows where its 64 entries go,
 // and a Newton iteration only rewrites values (no allocation, no search).
+#include <algorithm>
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -49,25 +51,53 @@ public:
   virtual ElementMatrix element_matrix(int ei, int ej) const = 0;
 };
 
+/// The bulk part of the discrete equations: internal forces f(u) and their tangent df/du in the
+/// fixed pattern.  Also an ElementMatrixSource: the current (secant) element matrices K_e with
+/// f_e = K_e u_e at the committed state, for the layer forces.
+class BulkModel : public ElementMatrixSource {
+public:
+  /// f = f_int(u) over the free equations.
+  virtual void internal_force(const double* u, double* f) = 0;
+  /// values = d f_int / du at u, in the fixed pattern.
+  virtual void tangent(const double* u, double* values) = 0;
+  /// Accepts u as the converged state of an increment (history, secant matrices, statistics).
+  virtual void commit(const double* u) = 0;
+  /// Integration points beyond the elastic limit at the committed state.
+  virtual long plastic_points() const = 0;
+  /// The largest strain intensity e_u over all integration points at the committed state.
+  virtual double max_strain_intensity() const = 0;
+};
+
 /// Linear elasticity on the mesh: one closed-form matrix per pair of element size classes
 /// (a graded tensor mesh has few distinct rectangles), and the assembled stiffness K.
-class ElasticStiffness : public ElementMatrixSource {
+class ElasticStiffness : public BulkModel {
 public:
   ElasticStiffness(const Mesh& mesh, const ElasticMaterial& material, const StiffnessPattern& pattern);
 
   ElementMatrix element_matrix(int ei, int ej) const override;
+  void internal_force(const double* u, double* f) override { pattern_.multiply(values_, u, f); }
+  void tangent(const double*, double* values) override { std::copy(values_.begin(), values_.end(), values); }
+  void commit(const double* u) override;
+  long plastic_points() const override { return 0; }
+  double max_strain_intensity() const override { return max_strain_intensity_; }
   const ElementMatrix& cached_matrix(int ei, int ej) const {
     return by_class_[mesh_.width_class(ei) * mesh_.height_classes() + mesh_.height_class(ej)];
   }
   const std::vector<double>& values() const { return values_; }
+  const Mesh& mesh() const { return mesh_; }
+  const StiffnessPattern& pattern() const { return pattern_; }
   /// f = K u
-  void internal_force(const double* u, double* f) const { pattern_.multiply(values_, u, f); }
+  void multiply(const double* u, double* f) const { pattern_.multiply(values_, u, f); }
 
 private:
   const Mesh& mesh_;
   const StiffnessPattern& pattern_;
   std::vector<ElementMatrix, Eigen::aligned_allocator<ElementMatrix>> by_class_;
   std::vector<double> values_;
+  double max_strain_intensity_ = 0.0;
 };
+
+/// Strain (eps11, eps22, gamma12) at each 2x2 Gauss point of element (ei, ej).
+std::array<VoigtVector, 4> gauss_point_strains(const Mesh& mesh, int ei, int ej, const double* u);
 
 }  // namespace indentsim
