@@ -18,13 +18,15 @@ CurveWriter::~CurveWriter() {
 }
 
 std::string CurveWriter::header() {
-  return "step,alpha,P,a,contact_nodes,newton_iters,factorizations,cutbacks,wall_s";
+  return "step,alpha,P,a,contact_nodes,newton_iters,factorizations,cutbacks,plastic_points,max_strain_intensity,"
+         "wall_s";
 }
 
 std::string CurveWriter::format(const IncrementRecord& r) {
   // Full round-trip precision: the curve is data, not a report.
-  return fmt::format("{},{:.17g},{:.17g},{:.17g},{},{},{},{},{:.6f}", r.step, r.alpha, r.force, r.half_width,
-                     r.contact_nodes, r.newton_iterations, r.factorizations, r.cutbacks, r.wall_seconds);
+  return fmt::format("{},{:.17g},{:.17g},{:.17g},{},{},{},{},{},{:.17g},{:.6f}", r.step, r.alpha, r.force,
+                     r.half_width, r.contact_nodes, r.newton_iterations, r.factorizations, r.cutbacks,
+                     r.plastic_points, r.max_strain_intensity, r.wall_seconds);
 }
 
 void CurveWriter::write(const IncrementRecord& record) {

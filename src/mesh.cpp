@@ -121,12 +121,11 @@ double MeshPlan::estimated_bytes() const {
          n * 8.0 * 12.0;
 }
 
-MeshPlan plan_mesh(const LoadCase& lc) {
+MeshPlan plan_mesh(const LoadCase& lc, std::optional<double> measured_half_width) {
   const auto& m = lc.mesh;
   MeshPlan plan;
-  plan.contact_half_width_estimate =
-      m.contact_half_width.value_or(hertz::estimate_half_width(lc.max_depth(), lc.punch.radius, lc.geometry.ly,
-                                                               lc.material.nu));
+  plan.contact_half_width_estimate = m.contact_half_width.value_or(measured_half_width.value_or(
+      hertz::estimate_half_width(lc.max_depth(), lc.punch.radius, lc.geometry.ly, lc.material.nu)));
   const double a_star = plan.contact_half_width_estimate;
   plan.fine_spacing = a_star / static_cast<double>(m.contact_nodes);
   // The fine zone holds the contact with a margin for the estimate, and the layer below it

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <optional>
 
 #include <fmt/format.h>
 
@@ -9,19 +10,61 @@
 
 namespace indentsim {
 
+namespace {
+
+// Plastic scenes spread their contact wider than the elastic Hertz estimate, up to the punch's
+// chord sqrt(2 R alpha) when the material flows freely.  A coarse pilot run of the same load
+// case (8 elements across the chord, 4 increments) measures the final contact half-width; the
+// real mesh is planned from it with a 5% margin.  The pilot sets mesh.contact_half_width itself,
+// so it never runs a pilot of its own.  Should it fail, the chord is a safe upper bound.
+double pilot_contact_half_width(const LoadCase& lc) {
+  const double depth = lc.max_depth();
+  const double chord = std::sqrt(2.0 * lc.punch.radius * depth - depth * depth);
+  LoadCase pilot = lc;
+  pilot.mesh = MeshInput{};
+  pilot.mesh.contact_nodes = 8;
+  pilot.mesh.contact_half_width = chord;
+  pilot.load.path = {0.0, depth};
+  pilot.load.increments = 4;
+  pilot.solver.tolerance = std::max(lc.solver.tolerance, 1e-9);
+  double widest = 0.0;
+  try {
+    Simulation sim(pilot);
+    sim.run([&](const IncrementRecord& r) { widest = std::max(widest, r.half_width); });
+  } catch (const SolverError&) {
+    return chord;
+  }
+  return widest > 0.0 ? std::min(chord, 1.05 * widest) : chord;
+}
+
+}  // namespace
+
 Simulation::Simulation(LoadCase load_case) : load_case_(std::move(load_case)) {
-  if (load_case_.material.model != MaterialModel::elastic)
+  const auto& m = load_case_.material;
+  if (m.model == MaterialModel::j2)
     throw InputError(load_case_.source, "material.model",
-                     fmt::format("\"{}\" is not available in this version (use \"elastic\")",
-                                 to_string(load_case_.material.model)));
-  plan_ = plan_mesh(load_case_);
+                     "\"j2\" is not available in this version (use \"elastic\" or \"ilyushin\")");
+  const ElasticMaterial material{m.E, m.nu};
+  std::optional<IlyushinLaw> law;
+  if (m.model == MaterialModel::ilyushin) {
+    law.emplace(material, m.e0, m.hardening, m.kappa, m.n);
+    if (auto violation = law->admissibility_violation())
+      throw InputError(load_case_.source, m.hardening == HardeningLaw::linear ? "material.kappa" : "material.n",
+                       *violation);
+  }
+  plan_ = plan_mesh(load_case_);  // also refuses a mesh too large before any work
+  if (law && !load_case_.mesh.contact_half_width) plan_ = plan_mesh(load_case_, pilot_contact_half_width(load_case_));
   mesh_ = std::make_unique<Mesh>(Mesh::from_plan(load_case_, plan_));
   pattern_ = std::make_unique<StiffnessPattern>(*mesh_);
-  const ElasticMaterial material{load_case_.material.E, load_case_.material.nu};
   stiffness_ = std::make_unique<ElasticStiffness>(*mesh_, material, *pattern_);
+  bulk_ = stiffness_.get();
+  if (law) {
+    plastic_ = std::make_unique<IlyushinBulk>(*stiffness_, *law);
+    bulk_ = plastic_.get();
+  }
   contact_ = std::make_unique<ContactBoundary>(*mesh_, CylindricalPunch{load_case_.punch.radius}, *pattern_,
                                                stiffness_->values());
-  equations_ = std::make_unique<ElasticContactEquations>(*pattern_, *stiffness_, *contact_);
+  equations_ = std::make_unique<ContactEquations>(*pattern_, *bulk_, *contact_);
 
   NewtonSettings settings;
   settings.displacement_scale = load_case_.max_depth();
@@ -56,18 +99,28 @@ IncrementRecord Simulation::advance_to(double target) {
   for (;;) {
     double trial = alpha_ + step;
     if (std::abs(target - trial) <= 1e-12 * std::abs(target)) trial = target;
-    if (has_previous_) extrapolate(u_previous_, alpha_previous_, u_, alpha_, trial, guess_);
-    else guess_ = u_;
-    const NewtonReport report = newton_->solve(trial, guess_);
-    iterations += report.iterations;
-    factorizations += report.factorizations;
-    if (report.converged) {
+    // Full semi-smooth Newton steps first, for a quarter of the iteration budget (a converging
+    // increment needs far fewer; one that wanders is better handed on); then the same increment
+    // with KINSOL's line search and the whole budget; only then a cutback.
+    bool converged = false;
+    const int plain_budget = std::max(8, load_case_.solver.max_newton / 4);
+    for (Globalization g : {Globalization::none, Globalization::line_search}) {
+      predict(trial, iterations, factorizations);
+      last_report_ = newton_->solve(trial, guess_, g, g == Globalization::none ? plain_budget : 0);
+      iterations += last_report_.iterations;
+      factorizations += last_report_.factorizations;
+      if ((converged = last_report_.converged)) break;
+    }
+    const NewtonReport& report = last_report_;
+    if (converged) {
       u_previous_.swap(u_);
       u_.swap(guess_);
       alpha_previous_ = alpha_;
       alpha_ = trial;
       has_previous_ = true;
       if (trial == target) break;
+      // Grow the sub-step back after an easy one.
+      if (report.iterations <= 3) step *= 2.0;
       step = std::copysign(std::min(std::abs(step), std::abs(target - alpha_)), target - alpha_);
       continue;
     }
@@ -84,9 +137,27 @@ IncrementRecord Simulation::advance_to(double target) {
   return record(seconds, iterations, factorizations, cutbacks);
 }
 
+void Simulation::predict(double trial, long& iterations, long& factorizations) {
+  if (has_previous_) {
+    extrapolate(u_previous_, alpha_previous_, u_, alpha_, trial, guess_);
+    return;
+  }
+  guess_ = u_;
+  if (!plastic_) return;
+  // No history to extrapolate (the first increment): the elastic contact solution at the same
+  // depth settles the contact set before plasticity enters, which the coupled Newton otherwise
+  // has to find through the kinks of both at once.
+  equations_->use_bulk(*stiffness_);
+  const NewtonReport elastic = newton_->solve(trial, guess_);
+  equations_->use_bulk(*plastic_);
+  iterations += elastic.iterations;
+  factorizations += elastic.factorizations;
+  if (!elastic.converged) guess_ = u_;
+}
+
 ContactResult Simulation::contact() const {
   std::vector<double> internal_force(u_.size());
-  stiffness_->internal_force(u_.data(), internal_force.data());
+  bulk_->internal_force(u_.data(), internal_force.data());
   return evaluate_contact(*contact_, u_.data(), internal_force.data(), alpha_);
 }
 
@@ -95,7 +166,7 @@ double Simulation::contact_half_width() const {
 }
 
 std::vector<LayerForce> Simulation::layer_forces() const {
-  return indentsim::layer_forces(*mesh_, *stiffness_, u_.data());
+  return indentsim::layer_forces(*mesh_, *bulk_, u_.data());
 }
 
 void Simulation::check_fine_zone(double half_width) {
@@ -108,6 +179,7 @@ void Simulation::check_fine_zone(double half_width) {
 }
 
 IncrementRecord Simulation::record(double wall_seconds, long iterations, long factorizations, int cutbacks) {
+  bulk_->commit(u_.data());
   const ContactResult c = contact();
   IncrementRecord r;
   r.step = rows_++;
@@ -118,6 +190,8 @@ IncrementRecord Simulation::record(double wall_seconds, long iterations, long fa
   r.newton_iterations = iterations;
   r.factorizations = factorizations;
   r.cutbacks = cutbacks;
+  r.plastic_points = bulk_->plastic_points();
+  r.max_strain_intensity = bulk_->max_strain_intensity();
   r.wall_seconds = wall_seconds;
   check_fine_zone(r.half_width);
   return r;

@@ -15,22 +15,20 @@ static_assert(std::is_same_v<sunindextype, std::int64_t>,
 // ---------------------------------------------------------------------------------------------
 // The residual and Jacobian of elastic contact.
 
-ElasticContactEquations::ElasticContactEquations(const StiffnessPattern& pattern, const ElasticStiffness& stiffness,
-                                                 const ContactBoundary& contact)
-    : pattern_(pattern), stiffness_(stiffness), contact_(contact), internal_force_(pattern.size()) {
+ContactEquations::ContactEquations(const StiffnessPattern& pattern, BulkModel& bulk, const ContactBoundary& contact)
+    : pattern_(pattern), bulk_(&bulk), contact_(contact), internal_force_(pattern.size()) {
   for (const auto& c : contact.candidates()) contact_rows_.push_back(pattern.row_positions(c.equation));
 }
 
-void ElasticContactEquations::residual(const double* u, double alpha, double* f) {
-  stiffness_.internal_force(u, f);
+void ContactEquations::residual(const double* u, double alpha, double* f) {
+  bulk_->internal_force(u, f);
   for (const auto& c : contact_.candidates())
     f[c.equation] = ContactBoundary::complementarity(c, f[c.equation], u[c.equation], alpha);
 }
 
-void ElasticContactEquations::jacobian(const double* u, double alpha, double* values) {
-  const auto& k = stiffness_.values();
-  std::copy(k.begin(), k.end(), values);
-  stiffness_.internal_force(u, internal_force_.data());
+void ContactEquations::jacobian(const double* u, double alpha, double* values) {
+  bulk_->tangent(u, values);
+  bulk_->internal_force(u, internal_force_.data());
   const auto& cs = contact_.candidates();
   for (std::size_t i = 0; i < cs.size(); ++i) {
     const auto& c = cs[i];
@@ -113,6 +111,7 @@ struct NewtonSolver::Impl {
   sundials::KinsolMemory kinsol;
   double alpha = 0.0;
   std::string last_message;
+  std::vector<double> residual_history;
 
   Impl(IncrementEquations& eq, const NewtonSettings& s)
       : equations(eq),
@@ -162,7 +161,11 @@ struct NewtonSolver::Impl {
 
   static int residual_callback(N_Vector u, N_Vector f, void* data) {
     auto* me = static_cast<Impl*>(data);
-    me->equations.residual(N_VGetArrayPointer(u), me->alpha, N_VGetArrayPointer(f));
+    double* values = N_VGetArrayPointer(f);
+    me->equations.residual(N_VGetArrayPointer(u), me->alpha, values);
+    double norm = 0.0;
+    for (sunindextype i = 0; i < N_VGetLength(f); ++i) norm = std::max(norm, std::abs(values[i]));
+    me->residual_history.push_back(norm / me->settings.force_scale);
     return 0;
   }
 
@@ -195,17 +198,22 @@ NewtonSolver::NewtonSolver(IncrementEquations& equations, const NewtonSettings& 
 
 NewtonSolver::~NewtonSolver() = default;
 
-NewtonReport NewtonSolver::solve(double alpha, std::vector<double>& u) {
+NewtonReport NewtonSolver::solve(double alpha, std::vector<double>& u, Globalization globalization,
+                                 int max_iterations) {
   Impl& m = *impl_;
+  const int limit = max_iterations > 0 ? std::min(max_iterations, m.settings.max_iterations) : m.settings.max_iterations;
+  sundials::check(KINSetNumMaxIters(m.kinsol, limit), "KINSetNumMaxIters");
   m.alpha = alpha;
   m.last_message.clear();
+  m.residual_history.clear();
   double* data = N_VGetArrayPointer(m.u.get());
   std::copy(u.begin(), u.end(), data);
   const long factorizations_before = m.klu.numeric_factorizations;
   const long analyses_before = m.klu.symbolic_analyses;
 
   NewtonReport report;
-  report.kinsol_flag = KINSol(m.kinsol, m.u.get(), KIN_NONE, m.u_scale.get(), m.f_scale.get());
+  const int strategy = globalization == Globalization::line_search ? KIN_LINESEARCH : KIN_NONE;
+  report.kinsol_flag = KINSol(m.kinsol, m.u.get(), strategy, m.u_scale.get(), m.f_scale.get());
   long iterations = 0;
   KINGetNumNonlinSolvIters(m.kinsol, &iterations);
   report.iterations = iterations;
@@ -216,6 +224,7 @@ NewtonReport NewtonSolver::solve(double alpha, std::vector<double>& u) {
   // convergence, and a success must really satisfy the tolerance.
   report.converged = report.kinsol_flag >= 0 && report.residual <= m.settings.tolerance;
   report.message = m.last_message;
+  report.residual_history = m.residual_history;
   std::copy(data, data + u.size(), u.begin());
   return report;
 }

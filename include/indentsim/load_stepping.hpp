@@ -19,6 +19,8 @@ struct IncrementRecord {
   long newton_iterations = 0; ///< over every attempt of this increment, failed ones included
   long factorizations = 0;    ///< numeric LU factorizations over every attempt
   int cutbacks = 0;           ///< halvings needed to reach this increment
+  long plastic_points = 0;    ///< Gauss points beyond the elastic limit
+  double max_strain_intensity = 0.0;  ///< largest e_u over the Gauss points
   double wall_seconds = 0.0;  ///< wall-clock time spent on this increment
 };
 

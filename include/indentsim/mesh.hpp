@@ -8,6 +8,7 @@
 // Dirichlet conditions of the model: u = v = 0 on the base y = -ly, u = 0 on the axis x = 0.
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "indentsim/element.hpp"
@@ -37,7 +38,9 @@ struct MeshPlan {
 double default_growth(int contact_nodes);
 
 /// Plans the mesh for a load case; throws InputError if it cannot be built (e.g. too large).
-MeshPlan plan_mesh(const LoadCase& load_case);
+/// `measured_half_width`, when given, replaces the Hertz estimate of the final contact half-width
+/// (a pilot run measured it); an explicit mesh.contact_half_width still wins.
+MeshPlan plan_mesh(const LoadCase& load_case, std::optional<double> measured_half_width = std::nullopt);
 
 /// Node coordinates along one axis from 0 to `length`: uniform spacing `spacing` up to
 /// `fine_length`, then geometric growth of ratio <= `growth`, closing exactly on `length`.

@@ -13,6 +13,7 @@
 #include "indentsim/load_case.hpp"
 #include "indentsim/load_stepping.hpp"
 #include "indentsim/mesh.hpp"
+#include "indentsim/plasticity.hpp"
 #include "indentsim/solver.hpp"
 
 namespace indentsim {
@@ -27,7 +28,12 @@ public:
   const MeshPlan& plan() const { return plan_; }
   const Mesh& mesh() const { return *mesh_; }
   const ContactBoundary& contact_boundary() const { return *contact_; }
-  const ElementMatrixSource& element_matrices() const { return *stiffness_; }
+  const ElementMatrixSource& element_matrices() const { return *bulk_; }
+  const BulkModel& bulk() const { return *bulk_; }
+  /// The plastic model, or nullptr for an elastic load case (which never enters plasticity code).
+  const IlyushinBulk* plasticity() const { return plastic_.get(); }
+  /// Newton report of the last attempt (for diagnostics and tests).
+  const NewtonReport& last_newton_report() const { return last_report_; }
 
   /// Steps the whole load path, calling `on_increment` after every converged increment (the
   /// initial state alpha = 0 included).  Throws SolverError when an increment cannot converge
@@ -48,6 +54,8 @@ public:
 
 private:
   IncrementRecord record(double wall_seconds, long iterations, long factorizations, int cutbacks);
+  /// Initial guess for depth `trial` into guess_ (counts any solve it needs).
+  void predict(double trial, long& iterations, long& factorizations);
   void check_fine_zone(double half_width);
 
   LoadCase load_case_;
@@ -55,8 +63,10 @@ private:
   std::unique_ptr<Mesh> mesh_;
   std::unique_ptr<StiffnessPattern> pattern_;
   std::unique_ptr<ElasticStiffness> stiffness_;
+  std::unique_ptr<IlyushinBulk> plastic_;
+  BulkModel* bulk_ = nullptr;  // stiffness_ or plastic_
   std::unique_ptr<ContactBoundary> contact_;
-  std::unique_ptr<ElasticContactEquations> equations_;
+  std::unique_ptr<ContactEquations> equations_;
   std::unique_ptr<NewtonSolver> newton_;
 
   double alpha_ = 0.0, alpha_previous_ = 0.0;
@@ -65,6 +75,7 @@ private:
   int rows_ = 0;
   std::vector<std::string> warnings_;
   bool warned_fine_zone_ = false;
+  NewtonReport last_report_;
 };
 
 }  // namespace indentsim

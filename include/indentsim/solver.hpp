@@ -26,19 +26,21 @@ public:
   virtual void jacobian(const double* u, double alpha, double* values) = 0;
 };
 
-/// Linear elasticity with Signorini contact: F = K u, with the contact rows replaced by the
-/// complementarity function of ContactBoundary.
-class ElasticContactEquations : public IncrementEquations {
+/// The bulk model (elastic or plastic) with Signorini contact: F = f_int(u), with the contact
+/// rows replaced by the complementarity function of ContactBoundary.  One Newton iteration
+/// handles the material nonlinearity and the contact together.
+class ContactEquations : public IncrementEquations {
 public:
-  ElasticContactEquations(const StiffnessPattern& pattern, const ElasticStiffness& stiffness,
-                          const ContactBoundary& contact);
+  ContactEquations(const StiffnessPattern& pattern, BulkModel& bulk, const ContactBoundary& contact);
   const StiffnessPattern& pattern() const override { return pattern_; }
+  /// Solve with another bulk model on the same pattern (the elastic predictor of a plastic run).
+  void use_bulk(BulkModel& bulk) { bulk_ = &bulk; }
   void residual(const double* u, double alpha, double* f) override;
   void jacobian(const double* u, double alpha, double* values) override;
 
 private:
   const StiffnessPattern& pattern_;
-  const ElasticStiffness& stiffness_;
+  BulkModel* bulk_;
   const ContactBoundary& contact_;
   std::vector<std::vector<std::int64_t>> contact_rows_;  // value positions of each candidate's row
   std::vector<double> internal_force_;                    // scratch, sized once
@@ -51,6 +53,11 @@ struct NewtonSettings {
   int max_iterations = 50;
 };
 
+enum class Globalization {
+  none,        ///< full semi-smooth Newton steps (KIN_NONE)
+  line_search  ///< KINSOL's backtracking line search on ||F||^2 (KIN_LINESEARCH)
+};
+
 struct NewtonReport {
   bool converged = false;
   long iterations = 0;
@@ -59,6 +66,7 @@ struct NewtonReport {
   double residual = 0.0;        ///< max |F| / force_scale at the returned u
   int kinsol_flag = 0;
   std::string message;          ///< KINSOL's own words when it failed
+  std::vector<double> residual_history;  ///< max |F| / force_scale at each residual evaluation
 };
 
 class NewtonSolver {
@@ -69,7 +77,9 @@ public:
   NewtonSolver& operator=(const NewtonSolver&) = delete;
 
   /// Solves F(u; alpha) = 0 starting from u (the predictor), leaving the last iterate in u.
-  NewtonReport solve(double alpha, std::vector<double>& u);
+  /// `max_iterations` (when > 0) caps this attempt below the settings' limit.
+  NewtonReport solve(double alpha, std::vector<double>& u, Globalization globalization = Globalization::none,
+                     int max_iterations = 0);
 
   long total_factorizations() const;
   long total_symbolic_analyses() const;
