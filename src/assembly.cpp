@@ -106,6 +106,7 @@ ElasticStiffness::ElasticStiffness(const Mesh& mesh, const ElasticMaterial& mate
   for (int ei = 0; ei < mesh.elements_x(); ++ei) widths[mesh.width_class(ei)] = mesh.rectangle(ei, 0).width;
   for (int ej = 0; ej < mesh.elements_y(); ++ej) heights[mesh.height_class(ej)] = mesh.rectangle(0, ej).height;
   const LameConstants lame = material.lame();
+  lame_ = lame;
   by_class_.resize(static_cast<std::size_t>(mesh.width_classes()) * mesh.height_classes());
   for (int w = 0; w < mesh.width_classes(); ++w)
     for (int h = 0; h < mesh.height_classes(); ++h)
@@ -119,6 +120,7 @@ ElasticStiffness::ElasticStiffness(const Mesh& mesh, const ElasticMaterial& mate
 ElementMatrix ElasticStiffness::element_matrix(int ei, int ej) const { return cached_matrix(ei, ej); }
 
 void ElasticStiffness::commit(const double* u) {
+  committed_u_.assign(u, u + pattern_.size());
   // Reported only (how close the elastic solution comes to a yield limit); no material law here.
   double largest = 0.0;
   for (int ei = 0; ei < mesh_.elements_x(); ++ei)
@@ -126,6 +128,19 @@ void ElasticStiffness::commit(const double* u) {
       for (const VoigtVector& strain : gauss_point_strains(mesh_, ei, ej, u))
         largest = std::max(largest, strain_intensity(strain));
   max_strain_intensity_ = largest;
+}
+
+std::array<GaussPointState, 4> ElasticStiffness::gauss_point_states(int ei, int ej) const {
+  std::array<GaussPointState, 4> states;
+  if (committed_u_.empty()) return states;
+  const auto strains = gauss_point_strains(mesh_, ei, ej, committed_u_.data());
+  const PlaneStrainMatrix d = plane_strain_stiffness(lame_);
+  for (int g = 0; g < 4; ++g) {
+    states[g].stress = d * strains[g];
+    states[g].stress33 = lame_.lambda * (strains[g][0] + strains[g][1]);
+    states[g].strain_intensity = strain_intensity(strains[g]);
+  }
+  return states;
 }
 
 std::array<VoigtVector, 4> gauss_point_strains(const Mesh& mesh, int ei, int ej, const double* u) {

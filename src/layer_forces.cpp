@@ -4,22 +4,51 @@
 
 namespace indentsim {
 
-std::vector<LayerForce> layer_forces(const Mesh& mesh, const ElementMatrixSource& matrices, const double* u) {
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  std::vector<LayerForce> layers(static_cast<std::size_t>(mesh.nodes_y()));
-  for (int j = 0; j < mesh.nodes_y(); ++j) {
-    layers[j].y = mesh.y(j);
-    layers[j].below = j > 0 ? 0.0 : nan;
-    layers[j].above = j < mesh.top_row() ? 0.0 : nan;
-  }
+std::vector<NodalLayerForces> nodal_layer_forces(const Mesh& mesh, const ElementMatrixSource& matrices,
+                                                 const double* u) {
+  std::vector<NodalLayerForces> nodal(static_cast<std::size_t>(mesh.nodes()));
   for (int ei = 0; ei < mesh.elements_x(); ++ei)
     for (int ej = 0; ej < mesh.elements_y(); ++ej) {
       const ElementVector fe = matrices.element_matrix(ei, ej) * gather(mesh, ei, ej, u);
-      // This element lies above line ej (its vertices 1, 3) and below line ej + 1 (vertices 2, 4).
-      layers[ej].above += 2.0 * (fe[v_index(1)] + fe[v_index(3)]);
-      layers[ej + 1].below -= 2.0 * (fe[v_index(2)] + fe[v_index(4)]);
+      const auto nodes = mesh.element_nodes(ei, ej);
+      // Vertices 2 and 4 are on the line above the element: the element is "below" them.
+      for (int vertex : {2, 4}) {
+        nodal[nodes[vertex - 1]].normal_below += fe[v_index(vertex)];
+        nodal[nodes[vertex - 1]].tangential_below += fe[u_index(vertex)];
+      }
+      // Vertices 1 and 3 are on the line below it: the element is "above" them.
+      for (int vertex : {1, 3}) {
+        nodal[nodes[vertex - 1]].normal_above += fe[v_index(vertex)];
+        nodal[nodes[vertex - 1]].tangential_above += fe[u_index(vertex)];
+      }
     }
+  return nodal;
+}
+
+double tributary_width(const Mesh& mesh, int i) {
+  const double left = i > 0 ? 0.5 * (mesh.x(i) - mesh.x(i - 1)) : 0.0;
+  const double right = i + 1 < mesh.nodes_x() ? 0.5 * (mesh.x(i + 1) - mesh.x(i)) : 0.0;
+  return left + right;
+}
+
+std::vector<LayerForce> layer_forces(const Mesh& mesh, const std::vector<NodalLayerForces>& nodal) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::vector<LayerForce> layers(static_cast<std::size_t>(mesh.nodes_y()));
+  for (int j = 0; j < mesh.nodes_y(); ++j) {
+    double below = 0.0, above = 0.0;
+    for (int i = 0; i < mesh.nodes_x(); ++i) {
+      below += nodal[mesh.node(i, j)].normal_below;
+      above += nodal[mesh.node(i, j)].normal_above;
+    }
+    layers[j].y = mesh.y(j);
+    layers[j].below = j > 0 ? -2.0 * below : nan;
+    layers[j].above = j < mesh.top_row() ? 2.0 * above : nan;
+  }
   return layers;
+}
+
+std::vector<LayerForce> layer_forces(const Mesh& mesh, const ElementMatrixSource& matrices, const double* u) {
+  return layer_forces(mesh, nodal_layer_forces(mesh, matrices, u));
 }
 
 }  // namespace indentsim

@@ -63,7 +63,7 @@ const std::vector<SectionSpec>& schema() {
        false,
        {{"contact_nodes", false}, {"contact_half_width", false}, {"fine_width", false},
         {"fine_depth", false}, {"growth", false}}},
-      {"output", false, {{"dir", false}}},
+      {"output", false, {{"dir", false}, {"fields_every", false}, {"profile_depths", false}}},
       {"solver", false, {{"tolerance", false}, {"max_newton", false}, {"max_cutbacks", false}}},
   };
   return sections;
@@ -263,6 +263,8 @@ LoadCase from_table(const toml::table& root, const std::string& source) {
   r.read_optional_number("mesh", "growth", lc.mesh.growth);
 
   r.read_string("output", "dir", lc.output.dir);
+  r.read_integer("output", "fields_every", lc.output.fields_every);
+  r.read_number_array("output", "profile_depths", lc.output.profile_depths);
 
   r.read_number("solver", "tolerance", lc.solver.tolerance);
   r.read_integer("solver", "max_newton", lc.solver.max_newton);
@@ -333,6 +335,12 @@ void validate(const LoadCase& lc) {
     fail("mesh.growth", fmt::format("must lie in [1, 2] (got {})", *lc.mesh.growth));
 
   if (lc.output.dir.empty()) fail("output.dir", "must not be empty");
+  if (lc.output.fields_every < 0) fail("output.fields_every", fmt::format("must be >= 0 (got {})", lc.output.fields_every));
+  for (std::size_t i = 0; i < lc.output.profile_depths.size(); ++i) {
+    const double d = lc.output.profile_depths[i];
+    if (!(d >= 0.0 && d <= lc.geometry.ly))
+      fail("output.profile_depths", fmt::format("element {} = {} is not a depth within the block [0, {}]", i, d, lc.geometry.ly));
+  }
 
   if (!(lc.solver.tolerance > 0.0 && lc.solver.tolerance < 1e-2))
     fail("solver.tolerance", fmt::format("must lie in (0, 1e-2) (got {})", lc.solver.tolerance));
@@ -340,6 +348,35 @@ void validate(const LoadCase& lc) {
     fail("solver.max_newton", fmt::format("must lie in [1, 1000] (got {})", lc.solver.max_newton));
   if (lc.solver.max_cutbacks < 0 || lc.solver.max_cutbacks > 60)
     fail("solver.max_cutbacks", fmt::format("must lie in [0, 60] (got {})", lc.solver.max_cutbacks));
+}
+
+std::string to_toml(const LoadCase& lc) {
+  const auto numbers = [](const std::vector<double>& v) {
+    std::string s = "[";
+    for (std::size_t i = 0; i < v.size(); ++i) s += fmt::format("{}{:.17g}", i ? ", " : "", v[i]);
+    return s + "]";
+  };
+  std::string t = fmt::format("# The load case as run (from {}), every key explicit.\n", lc.source);
+  t += fmt::format("[geometry]\nlx = {:.17g}\nly = {:.17g}\n\n", lc.geometry.lx, lc.geometry.ly);
+  t += fmt::format("[punch]\nradius = {:.17g}\n\n", lc.punch.radius);
+  t += fmt::format("[material]\nmodel = \"{}\"\nE = {:.17g}\nnu = {:.17g}\ne0 = {:.17g}\nhardening = \"{}\"\n"
+                   "kappa = {:.17g}\nn = {:.17g}\n\n",
+                   to_string(lc.material.model), lc.material.E, lc.material.nu, lc.material.e0,
+                   to_string(lc.material.hardening), lc.material.kappa, lc.material.n);
+  t += fmt::format("[load]\npath = {}\nincrements = {}\n\n", numbers(lc.load.path), lc.load.increments);
+  t += fmt::format("[mesh]\ncontact_nodes = {}\n", lc.mesh.contact_nodes);
+  if (lc.mesh.contact_half_width) t += fmt::format("contact_half_width = {:.17g}\n", *lc.mesh.contact_half_width);
+  if (lc.mesh.fine_width) t += fmt::format("fine_width = {:.17g}\n", *lc.mesh.fine_width);
+  if (lc.mesh.fine_depth) t += fmt::format("fine_depth = {:.17g}\n", *lc.mesh.fine_depth);
+  if (lc.mesh.growth) t += fmt::format("growth = {:.17g}\n", *lc.mesh.growth);
+  toml::table dir_table{{"dir", lc.output.dir}};
+  std::ostringstream dir_line;
+  dir_line << dir_table;
+  t += fmt::format("\n[output]\n{}\nfields_every = {}\nprofile_depths = {}\n\n", dir_line.str(), lc.output.fields_every,
+                   numbers(lc.output.profile_depths));
+  t += fmt::format("[solver]\ntolerance = {:.17g}\nmax_newton = {}\nmax_cutbacks = {}\n", lc.solver.tolerance,
+                   lc.solver.max_newton, lc.solver.max_cutbacks);
+  return t;
 }
 
 LoadCase parse_load_case(const std::string& toml_text, const std::string& source,

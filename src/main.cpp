@@ -1,7 +1,9 @@
 // indentsim: the command line.  Thin glue over the library: read a load case, run it, write
 // the outputs.  Exit status: 0 success, 2 bad input (nothing written), 3 the solver could not
 // converge (converged increments are kept), 1 anything else.
+#include <chrono>
 #include <cstdio>
+#include <unistd.h>
 #include <filesystem>
 #include <iostream>
 #include <string>
@@ -43,6 +45,49 @@ fs::path prepare_output_dir(const LoadCase& lc) {
   return dir;
 }
 
+/// The progress line on stderr for runs longer than a moment: increment k of N, alpha, P, Newton
+/// iterations, elapsed and remaining time.  Rewritten in place on a terminal; otherwise a line
+/// every few seconds.
+class Progress {
+public:
+  Progress(int increments, bool quiet)
+      : increments_(increments), quiet_(quiet), terminal_(isatty(fileno(stderr)) != 0), start_(clock::now()) {}
+
+  void update(const IncrementRecord& r) {
+    if (quiet_ || r.step == 0) return;
+    const double elapsed = seconds_since(start_);
+    if (elapsed < 1.0) return;
+    if (!terminal_ && seconds_since(last_) < 5.0 && r.step < increments_) return;
+    last_ = clock::now();
+    const double remaining = elapsed / r.step * std::max(0, increments_ - r.step);
+    const std::string line = fmt::format("increment {}/{}  alpha = {:.4g} m  P = {:.5g} N/m  Newton {}  elapsed {:.1f} s  "
+                                         "remaining ~{:.1f} s",
+                                         r.step, increments_, r.alpha, r.force, r.newton_iterations, elapsed, remaining);
+    if (terminal_) {
+      fmt::print(stderr, "\r{}\033[K", line);
+      shown_ = true;
+    } else {
+      fmt::print(stderr, "{}\n", line);
+    }
+    std::fflush(stderr);
+  }
+  void clear_line() {
+    if (shown_) fmt::print(stderr, "\r\033[K");
+    shown_ = false;
+  }
+  void finish() {
+    if (shown_) fmt::print(stderr, "\n");
+    shown_ = false;
+  }
+
+private:
+  using clock = std::chrono::steady_clock;
+  static double seconds_since(clock::time_point t) { return std::chrono::duration<double>(clock::now() - t).count(); }
+  int increments_;
+  bool quiet_, terminal_, shown_ = false;
+  clock::time_point start_, last_{};
+};
+
 void print_mesh(const Simulation& sim) {
   const auto& p = sim.plan();
   fmt::print("mesh: {} x {} nodes, {} unknowns; fine zone {:.4g} m x {:.4g} m at spacing {:.4g} m "
@@ -67,25 +112,31 @@ int command_run(const std::string& file, const std::vector<std::string>& overrid
   Simulation sim(lc);  // validates the mesh size before anything is written
   if (!quiet) print_mesh(sim);
   const fs::path dir = prepare_output_dir(lc);
-  const fs::path curve_path = dir / "curve.csv";
-  CurveWriter curve(curve_path);
+  RunOutput output(dir, lc);
+  Progress progress(static_cast<int>(plan_increments(lc.load.path, lc.load.increments).size()) - 1, quiet);
   std::size_t warnings_shown = 0;
   const auto show_warnings = [&] {
-    for (; warnings_shown < sim.warnings().size(); ++warnings_shown)
+    for (; warnings_shown < sim.warnings().size(); ++warnings_shown) {
+      progress.clear_line();
       fmt::print(stderr, "warning: {}\n", sim.warnings()[warnings_shown]);
+    }
   };
   int exit_code = 0;
   try {
     sim.run([&](const IncrementRecord& r) {
-      curve.write(r);
+      output.increment(sim, r);
       show_warnings();
+      progress.update(r);
     });
   } catch (const SolverError& e) {
+    progress.clear_line();
     fmt::print(stderr, "{}: {}\n", file, e.what());
     exit_code = exit_not_converged;
   }
+  progress.finish();
+  output.finish(sim);
   show_warnings();
-  if (!quiet) fmt::print("P-alpha curve: {}\n", curve_path.string());
+  if (!quiet) fmt::print("P-alpha curve: {}\n", output.curve_path().string());
   return exit_code;
 }
 
@@ -98,11 +149,12 @@ int main(int argc, char** argv) {
   std::vector<std::string> overrides;
   bool quiet = false;
 
-  CLI::App* run = app.add_subcommand("run", "solve a load case and write DIR/curve.csv");
+  CLI::App* run = app.add_subcommand(
+      "run", "solve a load case; write DIR/curve.csv, fields.pvd, layers.csv, profiles.csv, case.toml");
   run->add_option("case", file, "load case (TOML)")->required();
   run->add_option("--out", out, "output folder (overrides output.dir)");
   run->add_option("--set", overrides, "override a key: section.key=value")->take_all();
-  run->add_flag("--quiet,-q", quiet, "print nothing but warnings and errors");
+  run->add_flag("--quiet,-q", quiet, "print nothing but warnings and errors (no progress line)");
 
   CLI::App* check = app.add_subcommand("check", "validate a load case without solving");
   check->add_option("case", file, "load case (TOML)")->required();

@@ -81,6 +81,16 @@ void IlyushinBulk::commit(const double* u) {
     }
 }
 
+std::array<GaussPointState, 4> IlyushinBulk::gauss_point_states(int ei, int ej) const {
+  const auto strains = gauss_point_strains(mesh_, ei, ej, committed_u_.data());
+  std::array<GaussPointState, 4> states;
+  for (int g = 0; g < 4; ++g) {
+    const SecantResponse r = law_.respond(strains[g]);
+    states[g] = {r.stress, r.stress33, r.strain_intensity, r.omega, r.plastic};
+  }
+  return states;
+}
+
 ElementMatrix IlyushinBulk::element_matrix(int ei, int ej) const {
   std::array<VoigtVector, 4> strains;
   if (!yields(ei, ej, committed_u_.data(), strains)) return elastic_.cached_matrix(ei, ej);

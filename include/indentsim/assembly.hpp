@@ -51,6 +51,15 @@ public:
   virtual ElementMatrix element_matrix(int ei, int ej) const = 0;
 };
 
+/// The material state at one Gauss point of the committed solution.
+struct GaussPointState {
+  VoigtVector stress = VoigtVector::Zero();  ///< (sigma11, sigma22, sigma12) [Pa]
+  double stress33 = 0.0;                     ///< out-of-plane stress of plane strain [Pa]
+  double strain_intensity = 0.0;             ///< e_u
+  double omega = 0.0;                        ///< Ilyushin's omega (0 when elastic)
+  bool plastic = false;
+};
+
 /// The bulk part of the discrete equations: internal forces f(u) and their tangent df/du in the
 /// fixed pattern.  Also an ElementMatrixSource: the current (secant) element matrices K_e with
 /// f_e = K_e u_e at the committed state, for the layer forces.
@@ -66,6 +75,8 @@ public:
   virtual long plastic_points() const = 0;
   /// The largest strain intensity e_u over all integration points at the committed state.
   virtual double max_strain_intensity() const = 0;
+  /// States at the four Gauss points of element (ei, ej), committed solution (paper vertex order).
+  virtual std::array<GaussPointState, 4> gauss_point_states(int ei, int ej) const = 0;
 };
 
 /// Linear elasticity on the mesh: one closed-form matrix per pair of element size classes
@@ -80,6 +91,7 @@ public:
   void commit(const double* u) override;
   long plastic_points() const override { return 0; }
   double max_strain_intensity() const override { return max_strain_intensity_; }
+  std::array<GaussPointState, 4> gauss_point_states(int ei, int ej) const override;
   const ElementMatrix& cached_matrix(int ei, int ej) const {
     return by_class_[mesh_.width_class(ei) * mesh_.height_classes() + mesh_.height_class(ej)];
   }
@@ -94,6 +106,8 @@ private:
   const StiffnessPattern& pattern_;
   std::vector<ElementMatrix, Eigen::aligned_allocator<ElementMatrix>> by_class_;
   std::vector<double> values_;
+  LameConstants lame_;
+  std::vector<double> committed_u_;
   double max_strain_intensity_ = 0.0;
 };
 

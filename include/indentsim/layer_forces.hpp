@@ -1,11 +1,20 @@
 #pragma once
-// The paper's finite-difference view of equilibrium (MODEL.md, "Finite-difference view").
+// The paper's finite-difference view of equilibrium (MODEL.md, "Finite-difference view";
+// Yazici 2023, section "Obtaining the Finite Difference Equation at Any Point").
 //
-// At a node, the rows of the local stiffness matrices of the elements below it (rows 6 and 8,
-// the v rows of their top vertices 2 and 4) give the normal layer force sigma_N^-, those of the
-// elements above (rows 5 and 7, vertices 1 and 3) give sigma_N^+.  Summed along a horizontal mesh
-// line y_j, both equal the force carried across that line, which must be the punch force P on
-// every line: the base reaction below, the contact force on top.
+// At node (i, j), multiplying rows of the current (secant) local stiffness matrices by the
+// element unknowns gives the paper's layer quantities:
+//   sigma_N^- : rows 6 and 8 (v of vertices 2, 4) of the elements below the node,
+//   sigma_N^+ : rows 5 and 7 (v of vertices 1, 3) of the elements above,
+//   sigma_T^- : rows 2 and 4 (u of vertices 2, 4) of the elements below,
+//   sigma_T^+ : rows 1 and 3 (u of vertices 1, 3) of the elements above.
+// They are nodal forces per unit thickness [N/m].  Discrete equilibrium at a free interior node
+// is sigma_N^- + sigma_N^+ = 0 and sigma_T^- + sigma_T^+ = 0 (the finite-difference equations).
+// Divided by the node's tributary width w_i they approximate the stresses on the mesh line:
+// sigma_N^- / w ~ sigma22 and sigma_T^- / w ~ sigma12 just below the line (on the top surface,
+// -sigma_N^- / w is the contact pressure).  Summed along a line y_j, -2 sum sigma_N^- (the force
+// carried across the line, both halves) equals the punch force P on every line: P^-(y_j) and
+// P^+(y_j) = 2 sum sigma_N^+ in the paper.
 #include <vector>
 
 #include "indentsim/assembly.hpp"
@@ -13,15 +22,29 @@
 
 namespace indentsim {
 
+/// The paper's sigma_N^-, sigma_N^+, sigma_T^-, sigma_T^+ at one node [N/m].
+struct NodalLayerForces {
+  double normal_below = 0.0, normal_above = 0.0;
+  double tangential_below = 0.0, tangential_above = 0.0;
+};
+
+/// Layer forces at every node, indexed by Mesh::node(i, j).
+std::vector<NodalLayerForces> nodal_layer_forces(const Mesh& mesh, const ElementMatrixSource& matrices,
+                                                 const double* u);
+
+/// Tributary width of node i along x: half of each adjacent element (one half at the ends) [m].
+double tributary_width(const Mesh& mesh, int i);
+
 struct LayerForce {
   double y = 0.0;
-  /// P^-(y_j) = -2 sum (K_e u_e)[rows 6, 8] over the elements below the line (NaN on the base).
+  /// P^-(y_j) = -2 sum_i sigma_N^-(i, j) (NaN on the base, which has no elements below).
   double below = 0.0;
-  /// P^+(y_j) = +2 sum (K_e u_e)[rows 5, 7] over the elements above the line (NaN on the top).
+  /// P^+(y_j) = +2 sum_i sigma_N^+(i, j) (NaN on the top, which has no elements above).
   double above = 0.0;
 };
 
 /// Layer forces for every horizontal mesh line, both halves of the model, per unit thickness.
+std::vector<LayerForce> layer_forces(const Mesh& mesh, const std::vector<NodalLayerForces>& nodal);
 std::vector<LayerForce> layer_forces(const Mesh& mesh, const ElementMatrixSource& matrices, const double* u);
 
 }  // namespace indentsim

@@ -45,6 +45,8 @@ struct MeshInput {
 
 struct OutputInput {
   std::string dir = "out";  ///< output folder (relative to the working directory)
+  int fields_every = 0;     ///< VTU every N increments (0: the final state only)
+  std::vector<double> profile_depths;  ///< depths [m] of the stress profiles besides the surface
 };
 
 struct SolverInput {
@@ -78,6 +80,9 @@ LoadCase parse_load_case(const std::string& toml_text, const std::string& source
 
 /// Checks every physical constraint (E > 0, -1 < nu < 0.5, ...); throws InputError.
 void validate(const LoadCase& load_case);
+
+/// The load case as TOML (every key, defaults filled in): what a run actually used.
+std::string to_toml(const LoadCase& load_case);
 
 std::string to_string(MaterialModel model);
 std::string to_string(HardeningLaw law);

@@ -25,6 +25,7 @@ public:
   double max_strain_intensity() const override { return max_strain_intensity_; }
   /// Secant element matrix at the committed state: f_e = K_e u_e exactly (sigma = D_secant eps).
   ElementMatrix element_matrix(int ei, int ej) const override;
+  std::array<GaussPointState, 4> gauss_point_states(int ei, int ej) const override;
 
   const IlyushinLaw& law() const { return law_; }
   /// Strain intensity at each Gauss point of the committed state (element-major, 4 per element).

@@ -1,9 +1,10 @@
-// Benchmark (prints, not a test): the elastic default case at three mesh sizes.
-// For each size: unknowns, setup time, median wall time per increment, Newton iterations and
-// numeric factorizations per increment, KLU symbolic analyses per run.  Each size is run
-// `repeats` times and the medians are reported (this machine is noisy).
+// Benchmark (prints, not a test): load cases at three mesh sizes (contact_nodes 10, 20, 40).
+// For each size: unknowns, setup time (mesh, assembly, and for plastic cases the pilot run),
+// median wall time per increment, Newton iterations and numeric factorizations per increment,
+// KLU symbolic analyses per run, and the final force.  Each size is run `repeats` times and
+// the medians are reported (this machine is noisy).
 //
-//   indentsim_bench [loadcase] [repeats]
+//   indentsim_bench [repeats] [loadcase ...]     (default: loadcases/elastic.toml, loadcases/paper.toml)
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -24,10 +25,8 @@ double median(std::vector<double> v) {
 }
 }  // namespace
 
-int main(int argc, char** argv) {
-  const std::string file = argc > 1 ? argv[1] : std::string(INDENTSIM_SOURCE_DIR) + "/loadcases/elastic.toml";
-  const int repeats = argc > 2 ? std::max(1, std::atoi(argv[2])) : 3;
-  fmt::print("indentsim elastic benchmark: {} ({} repeats, medians)\n", file, repeats);
+void bench(const std::string& file, int repeats) {
+  fmt::print("\n{} ({} repeats, medians)\n", file, repeats);
   fmt::print("{:>13} {:>9} {:>10} {:>13} {:>10} {:>12} {:>9} {:>12}\n", "contact_nodes", "unknowns", "setup_s",
              "s/increment", "newton/inc", "factor/inc", "symbolic", "P_final");
   for (int contact_nodes : {10, 20, 40}) {
@@ -61,5 +60,16 @@ int main(int argc, char** argv) {
                median(setup), median(per_increment), newton, factor, symbolic, force);
     std::fflush(stdout);
   }
+}
+
+int main(int argc, char** argv) {
+  const int repeats = argc > 1 ? std::max(1, std::atoi(argv[1])) : 3;
+  std::vector<std::string> files;
+  for (int i = 2; i < argc; ++i) files.emplace_back(argv[i]);
+  if (files.empty())
+    for (const char* name : {"elastic.toml", "paper.toml"})
+      files.push_back(std::string(INDENTSIM_SOURCE_DIR) + "/loadcases/" + name);
+  fmt::print("indentsim benchmark\n");
+  for (const auto& f : files) bench(f, repeats);
   return 0;
 }

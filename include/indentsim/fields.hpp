@@ -1,0 +1,53 @@
+#pragma once
+// Field output of a run: what users look at besides the P-alpha curve.
+//  - layers.csv   the paper's layer forces P^-(y_j), P^+(y_j) on every horizontal mesh line;
+//  - profiles.csv sigma_N, sigma_T from the layer forces along the top surface and chosen depths,
+//                 next to the Gauss-point stresses extrapolated and averaged to the nodes;
+//  - fields/step_NNNNNN.vtu + fields.pvd  ParaView files (a time series over alpha).
+// Every file is written to a temporary name and renamed, so a reader never sees half a file.
+#include <array>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "indentsim/assembly.hpp"
+#include "indentsim/contact.hpp"
+#include "indentsim/layer_forces.hpp"
+#include "indentsim/mesh.hpp"
+
+namespace indentsim {
+
+/// Gauss-point stresses extrapolated to each element's vertices and averaged over the elements
+/// that share a node: (sigma11, sigma22, sigma12, sigma33, e_u) per node.
+struct NodalStresses {
+  std::vector<std::array<double, 5>> values;  ///< indexed by Mesh::node(i, j)
+};
+NodalStresses average_to_nodes(const Mesh& mesh, const BulkModel& bulk);
+
+/// Writes `text` to `path` atomically (temporary file, flush, rename).
+void write_file_atomically(const std::filesystem::path& path, const std::string& text);
+
+std::string layers_csv(const std::vector<LayerForce>& layers, double punch_force);
+
+/// Mesh lines of the profiles: the top surface and, for each depth, the nearest mesh line.
+std::vector<int> profile_lines(const Mesh& mesh, const std::vector<double>& depths);
+std::string profiles_csv(const Mesh& mesh, const std::vector<int>& lines, const std::vector<NodalLayerForces>& layer,
+                         const NodalStresses& nodal);
+
+/// A VTK XML unstructured grid of the current state.
+std::string vtu_document(const Mesh& mesh, const double* u, const BulkModel& bulk, const NodalStresses& nodal,
+                         const ContactBoundary& contact, const ContactResult& contact_state);
+
+/// Keeps DIR/fields.pvd listing every VTU written so far, with alpha as the time value.
+class FieldSeries {
+public:
+  explicit FieldSeries(std::filesystem::path dir);
+  void add(int step, double alpha, const std::string& vtu_text);
+  const std::filesystem::path& pvd_path() const { return pvd_; }
+
+private:
+  std::filesystem::path dir_, pvd_;
+  std::vector<std::pair<double, std::string>> entries_;
+};
+
+}  // namespace indentsim

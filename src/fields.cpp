@@ -1,0 +1,198 @@
+#include "indentsim/fields.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+namespace indentsim {
+
+void write_file_atomically(const std::filesystem::path& path, const std::string& text) {
+  const std::filesystem::path temporary = path.string() + ".tmp";
+  {
+    std::FILE* f = std::fopen(temporary.c_str(), "wb");
+    if (!f) throw std::runtime_error("cannot write " + temporary.string());
+    const bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size() && std::fflush(f) == 0;
+    std::fclose(f);
+    if (!ok) throw std::runtime_error("writing " + temporary.string() + " failed");
+  }
+  std::filesystem::rename(temporary, path);
+}
+
+NodalStresses average_to_nodes(const Mesh& mesh, const BulkModel& bulk) {
+  NodalStresses nodal;
+  nodal.values.assign(static_cast<std::size_t>(mesh.nodes()), {0, 0, 0, 0, 0});
+  std::vector<int> count(static_cast<std::size_t>(mesh.nodes()), 0);
+  // Bilinear extrapolation from the 2x2 Gauss points (at 1/2 -+ 1/(2 sqrt 3)) to the vertices:
+  // in Gauss-point coordinates the vertices sit at 1/2 -+ sqrt(3)/2.
+  const double lo = 0.5 - std::sqrt(3.0) / 2.0, hi = 0.5 + std::sqrt(3.0) / 2.0;
+  const double vertex_s[4] = {lo, lo, hi, hi}, vertex_t[4] = {lo, hi, lo, hi};
+  const int point_s[4] = {0, 0, 1, 1}, point_t[4] = {0, 1, 0, 1};
+  for (int ei = 0; ei < mesh.elements_x(); ++ei)
+    for (int ej = 0; ej < mesh.elements_y(); ++ej) {
+      const auto states = bulk.gauss_point_states(ei, ej);
+      const auto nodes = mesh.element_nodes(ei, ej);
+      for (int q = 0; q < 4; ++q) {
+        std::array<double, 5> v{0, 0, 0, 0, 0};
+        for (int g = 0; g < 4; ++g) {
+          const double w = (point_s[g] ? vertex_s[q] : 1 - vertex_s[q]) * (point_t[g] ? vertex_t[q] : 1 - vertex_t[q]);
+          v[0] += w * states[g].stress[0];
+          v[1] += w * states[g].stress[1];
+          v[2] += w * states[g].stress[2];
+          v[3] += w * states[g].stress33;
+          v[4] += w * states[g].strain_intensity;
+        }
+        for (int c = 0; c < 5; ++c) nodal.values[nodes[q]][c] += v[c];
+        ++count[nodes[q]];
+      }
+    }
+  for (std::size_t n = 0; n < count.size(); ++n)
+    for (double& c : nodal.values[n]) c /= count[n];
+  return nodal;
+}
+
+std::string layers_csv(const std::vector<LayerForce>& layers, double punch_force) {
+  std::string out = "line,y,P_minus,P_plus,mismatch,P\n";
+  for (std::size_t j = 0; j < layers.size(); ++j) {
+    const auto& l = layers[j];
+    // Mismatch between the two sides of an interior line (the paper's P+ vs P-), relative to P.
+    const double mismatch =
+        std::isnan(l.below) || std::isnan(l.above) ? 0.0 : (l.below - l.above) / std::max(punch_force, 1e-300);
+    out += fmt::format("{},{:.17g},{:.17g},{:.17g},{:.6e},{:.17g}\n", j, l.y, l.below, l.above, mismatch, punch_force);
+  }
+  return out;
+}
+
+std::vector<int> profile_lines(const Mesh& mesh, const std::vector<double>& depths) {
+  std::vector<int> lines{mesh.top_row()};
+  for (double depth : depths) {
+    int best = mesh.top_row();
+    for (int j = 0; j < mesh.nodes_y(); ++j)
+      if (std::abs(mesh.y(j) + depth) < std::abs(mesh.y(best) + depth)) best = j;
+    lines.push_back(best);
+  }
+  return lines;
+}
+
+std::string profiles_csv(const Mesh& mesh, const std::vector<int>& lines, const std::vector<NodalLayerForces>& layer,
+                         const NodalStresses& nodal) {
+  // sigmaN_layer = sigma_N^- / w ~ sigma22 and sigmaT_layer = sigma_T^- / w ~ sigma12 just below
+  // the line (from the local stiffness rows); the *_nodal columns are the Gauss-point stresses
+  // averaged to the node.  The two views agree as the mesh is refined.
+  std::string out = "line,y,x,sigmaN_layer,sigmaT_layer,sigma22_nodal,sigma12_nodal,sigma11_nodal,e_u_nodal\n";
+  for (int j : lines)
+    for (int i = 0; i < mesh.nodes_x(); ++i) {
+      const int n = mesh.node(i, j);
+      const double w = tributary_width(mesh, i);
+      const auto& s = nodal.values[n];
+      // On the axis the u row carries the symmetry condition's reaction, not a stress: sigma12
+      // vanishes there by symmetry.
+      const double tangential = i == 0 ? 0.0 : layer[n].tangential_below / w;
+      out += fmt::format("{},{:.10g},{:.10g},{:.10g},{:.10g},{:.10g},{:.10g},{:.10g},{:.10g}\n", j, mesh.y(j),
+                         mesh.x(i), layer[n].normal_below / w, tangential, s[1], s[2], s[0], s[4]);
+    }
+  return out;
+}
+
+namespace {
+
+template <class F>
+void data_array(std::string& out, const char* type, const char* name, int components, std::size_t count, F value) {
+  out += fmt::format("        <DataArray type=\"{}\" Name=\"{}\" NumberOfComponents=\"{}\" format=\"ascii\">\n", type,
+                     name, components);
+  for (std::size_t k = 0; k < count; ++k) {
+    out += "          ";
+    for (int c = 0; c < components; ++c) out += fmt::format("{}{:.9g}", c ? " " : "", static_cast<double>(value(k, c)));
+    out += '\n';
+  }
+  out += "        </DataArray>\n";
+}
+
+}  // namespace
+
+std::string vtu_document(const Mesh& mesh, const double* u, const BulkModel& bulk, const NodalStresses& nodal,
+                         const ContactBoundary& contact, const ContactResult& contact_state) {
+  const auto nodes = static_cast<std::size_t>(mesh.nodes());
+  const auto cells = static_cast<std::size_t>(mesh.elements());
+  const auto displacement = [&](std::size_t n, int c) {
+    const int eq = mesh.equation(c == 0 ? Mesh::dof_u(static_cast<int>(n)) : Mesh::dof_v(static_cast<int>(n)));
+    return c < 2 && eq >= 0 ? u[eq] : 0.0;
+  };
+  // Contact status per node: 1 in contact, 0 open candidate, -1 cannot touch the punch.
+  std::vector<int> status(nodes, -1);
+  std::vector<double> pressure(nodes, 0.0);
+  for (std::size_t k = 0; k < contact.candidates().size(); ++k) {
+    const auto& c = contact.candidates()[k];
+    status[c.node] = contact_state.in_contact[k] ? 1 : 0;
+    pressure[c.node] = c.tributary_width > 0 ? contact_state.nodal_force[k] / c.tributary_width : 0.0;
+  }
+  // Cell data: Gauss-point averages, the largest e_u, and the plastic flag.
+  std::vector<std::array<double, 7>> cell(cells);
+  for (int ei = 0; ei < mesh.elements_x(); ++ei)
+    for (int ej = 0; ej < mesh.elements_y(); ++ej) {
+      auto& c = cell[mesh.element(ei, ej)];
+      c = {0, 0, 0, 0, 0, 0, 0};
+      for (const GaussPointState& s : bulk.gauss_point_states(ei, ej)) {
+        for (int k = 0; k < 3; ++k) c[k] += 0.25 * s.stress[k];
+        c[3] += 0.25 * s.stress33;
+        c[4] = std::max(c[4], s.strain_intensity);
+        c[5] += 0.25 * s.omega;
+        c[6] += s.plastic ? 1 : 0;
+      }
+    }
+
+  std::string out;
+  out.reserve(nodes * 200);
+  out += "<?xml version=\"1.0\"?>\n";
+  out += "<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n  <UnstructuredGrid>\n";
+  out += fmt::format("    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n", nodes, cells);
+  out += "      <PointData Vectors=\"displacement\">\n";
+  data_array(out, "Float64", "displacement", 3, nodes, displacement);
+  const char* stress_names[5] = {"sigma11", "sigma22", "sigma12", "sigma33", "strain_intensity"};
+  for (int c = 0; c < 5; ++c)
+    data_array(out, "Float64", stress_names[c], 1, nodes, [&](std::size_t n, int) { return nodal.values[n][c]; });
+  data_array(out, "Int32", "contact_status", 1, nodes, [&](std::size_t n, int) { return status[n]; });
+  data_array(out, "Float64", "contact_pressure", 1, nodes, [&](std::size_t n, int) { return pressure[n]; });
+  out += "      </PointData>\n      <CellData>\n";
+  const char* cell_names[6] = {"sigma11", "sigma22", "sigma12", "sigma33", "strain_intensity", "omega"};
+  for (int c = 0; c < 6; ++c)
+    data_array(out, "Float64", cell_names[c], 1, cells, [&](std::size_t e, int) { return cell[e][c]; });
+  data_array(out, "Int32", "plastic", 1, cells, [&](std::size_t e, int) { return cell[e][6] > 0 ? 1 : 0; });
+  data_array(out, "Int32", "plastic_points", 1, cells, [&](std::size_t e, int) { return cell[e][6]; });
+  out += "      </CellData>\n      <Points>\n";
+  data_array(out, "Float64", "coordinates", 3, nodes, [&](std::size_t n, int c) {
+    const int i = static_cast<int>(n) / mesh.nodes_y(), j = static_cast<int>(n) % mesh.nodes_y();
+    return c == 0 ? mesh.x(i) : c == 1 ? mesh.y(j) : 0.0;
+  });
+  out += "      </Points>\n      <Cells>\n";
+  out += "        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
+  for (int ei = 0; ei < mesh.elements_x(); ++ei)
+    for (int ej = 0; ej < mesh.elements_y(); ++ej)  // counter-clockwise, as VTK_QUAD wants
+      out += fmt::format("          {} {} {} {}\n", mesh.node(ei, ej), mesh.node(ei + 1, ej), mesh.node(ei + 1, ej + 1),
+                         mesh.node(ei, ej + 1));
+  out += "        </DataArray>\n        <DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
+  for (std::size_t e = 1; e <= cells; ++e) out += fmt::format("          {}\n", 4 * e);
+  out += "        </DataArray>\n        <DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
+  for (std::size_t e = 0; e < cells; ++e) out += "          9\n";
+  out += "        </DataArray>\n      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n";
+  return out;
+}
+
+FieldSeries::FieldSeries(std::filesystem::path dir) : dir_(std::move(dir)), pvd_(dir_ / "fields.pvd") {
+  std::filesystem::create_directories(dir_ / "fields");
+}
+
+void FieldSeries::add(int step, double alpha, const std::string& vtu_text) {
+  const std::string name = fmt::format("fields/step_{:06d}.vtu", step);
+  write_file_atomically(dir_ / name, vtu_text);
+  entries_.emplace_back(alpha, name);
+  std::string pvd = "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n";
+  for (const auto& [time, file] : entries_)
+    pvd += fmt::format("    <DataSet timestep=\"{:.17g}\" part=\"0\" file=\"{}\"/>\n", time, file);
+  pvd += "  </Collection>\n</VTKFile>\n";
+  write_file_atomically(pvd_, pvd);
+}
+
+}  // namespace indentsim

@@ -1,0 +1,115 @@
+#!/usr/bin/env python3
+"""Output files of a run, read as a user's tools would read them.
+
+    test_outputs.py INDENTSIM_EXECUTABLE SOURCE_DIR
+
+Runs a small plastic case with fields at every increment, then checks that
+  - every VTU is well-formed XML of the VTK UnstructuredGrid format with array sizes matching
+    the mesh (points = nx * ny from the coordinates themselves, cells = (nx-1)(ny-1), quads),
+  - fields.pvd lists exactly those files with alpha from curve.csv as time,
+  - layers.csv and profiles.csv have the promised columns and rows,
+  - plots/plot_results.py writes non-empty PNG and SVG figures.
+Prints 'N passed, N failed' and exits non-zero on any failure.
+"""
+import csv
+import pathlib
+import subprocess
+import sys
+import tempfile
+import xml.etree.ElementTree as ET
+
+failures = []
+passed = 0
+
+
+def check(condition, message):
+    global passed
+    if condition:
+        passed += 1
+    else:
+        failures.append(message)
+        print("FAIL:", message)
+
+
+def data_arrays(parent):
+    return {d.get("Name"): d for d in parent.findall("DataArray")}
+
+
+def check_vtu(path):
+    root = ET.parse(path).getroot()
+    check(root.tag == "VTKFile" and root.get("type") == "UnstructuredGrid", f"{path.name}: not a VTK UnstructuredGrid")
+    piece = root.find("UnstructuredGrid").find("Piece")
+    points, cells = int(piece.get("NumberOfPoints")), int(piece.get("NumberOfCells"))
+    coordinates = [float(v) for v in data_arrays(piece.find("Points"))["coordinates"].text.split()]
+    check(len(coordinates) == 3 * points, f"{path.name}: coordinates size")
+    nx = len({coordinates[3 * k] for k in range(points)})
+    ny = len({coordinates[3 * k + 1] for k in range(points)})
+    check(points == nx * ny, f"{path.name}: {points} points for a {nx} x {ny} grid")
+    check(cells == (nx - 1) * (ny - 1), f"{path.name}: {cells} cells for a {nx} x {ny} grid")
+    for section, count in (("PointData", points), ("CellData", cells)):
+        arrays = data_arrays(piece.find(section))
+        check(len(arrays) >= 5, f"{path.name}: {section} has {len(arrays)} arrays")
+        for name, array in arrays.items():
+            values = array.text.split()
+            components = int(array.get("NumberOfComponents", "1"))
+            check(len(values) == count * components, f"{path.name}: {section}/{name} has {len(values)} values")
+    for name in ("displacement", "sigma22", "contact_status"):
+        check(name in data_arrays(piece.find("PointData")), f"{path.name}: point array {name} missing")
+    for name in ("strain_intensity", "omega", "plastic"):
+        check(name in data_arrays(piece.find("CellData")), f"{path.name}: cell array {name} missing")
+    cell_arrays = data_arrays(piece.find("Cells"))
+    connectivity = [int(v) for v in cell_arrays["connectivity"].text.split()]
+    offsets = [int(v) for v in cell_arrays["offsets"].text.split()]
+    types = [int(v) for v in cell_arrays["types"].text.split()]
+    check(len(connectivity) == 4 * cells and all(0 <= n < points for n in connectivity), f"{path.name}: connectivity")
+    check(offsets == [4 * (e + 1) for e in range(cells)], f"{path.name}: offsets")
+    check(types == [9] * cells, f"{path.name}: cell types are not all VTK_QUAD")
+
+
+def main():
+    executable, source = pathlib.Path(sys.argv[1]), pathlib.Path(sys.argv[2])
+    with tempfile.TemporaryDirectory() as tmp:
+        out = pathlib.Path(tmp) / "run"
+        run = subprocess.run([str(executable), "run", str(source / "loadcases" / "deep_plastic.toml"), "--quiet",
+                              "--out", str(out), "--set", "mesh.contact_nodes=6", "--set", "load.increments=3",
+                              "--set", "output.fields_every=1", "--set", "output.profile_depths=[2e-4, 5e-4]"],
+                             capture_output=True, text=True)
+        check(run.returncode == 0, f"indentsim run failed: {run.stderr}")
+        if run.returncode != 0:
+            return
+
+        with open(out / "curve.csv", newline="") as f:
+            curve = list(csv.DictReader(f))
+        collection = ET.parse(out / "fields.pvd").getroot()
+        check(collection.get("type") == "Collection", "fields.pvd is not a VTK collection")
+        datasets = collection.find("Collection").findall("DataSet")
+        check(len(datasets) == len(curve), f"fields.pvd lists {len(datasets)} data sets for {len(curve)} increments")
+        for dataset, row in zip(datasets, curve):
+            check(abs(float(dataset.get("timestep")) - float(row["alpha"])) <= 1e-15, "pvd time is not alpha")
+            vtu = out / dataset.get("file")
+            check(vtu.is_file(), f"{vtu} listed but missing")
+            if vtu.is_file():
+                check_vtu(vtu)
+
+        with open(out / "layers.csv", newline="") as f:
+            layers = list(csv.DictReader(f))
+        check(len(layers) > 10 and {"y", "P_minus", "P_plus", "mismatch"} <= set(layers[0]), "layers.csv columns")
+        with open(out / "profiles.csv", newline="") as f:
+            profiles = list(csv.DictReader(f))
+        check(len({r["line"] for r in profiles}) == 3, "profiles.csv: surface plus two depths")
+        check({"sigmaN_layer", "sigmaT_layer", "sigma22_nodal", "sigma12_nodal"} <= set(profiles[0]),
+              "profiles.csv columns")
+        check((out / "case.toml").is_file(), "case.toml missing")
+
+        plot = subprocess.run([sys.executable, str(source / "plots" / "plot_results.py"), str(out)],
+                              capture_output=True, text=True)
+        check(plot.returncode == 0, f"plot_results.py failed: {plot.stderr}")
+        for name in ("curve", "pressure", "profiles", "plastic_zone"):
+            for suffix in ("png", "svg"):
+                figure = out / "figures" / f"{name}.{suffix}"
+                check(figure.is_file() and figure.stat().st_size > 1000, f"{figure.name} missing or empty")
+
+
+main()
+print(f"{passed} passed, {len(failures)} failed")
+sys.exit(1 if failures else 0)
