@@ -117,7 +117,10 @@ ElasticStiffness::ElasticStiffness(const Mesh& mesh, const ElasticMaterial& mate
     for (int ej = 0; ej < mesh.elements_y(); ++ej) pattern.scatter(mesh.element(ei, ej), cached_matrix(ei, ej), values_);
 }
 
-ElementMatrix ElasticStiffness::element_matrix(int ei, int ej) const { return cached_matrix(ei, ej); }
+ElementVector ElasticStiffness::element_force(int ei, int ej) const {
+  if (committed_u_.empty()) return ElementVector::Zero();
+  return cached_matrix(ei, ej) * gather(mesh_, ei, ej, committed_u_.data());
+}
 
 void ElasticStiffness::commit(const double* u) {
   committed_u_.assign(u, u + pattern_.size());

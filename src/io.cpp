@@ -37,8 +37,60 @@ void CurveWriter::write(const IncrementRecord& record) {
     throw std::runtime_error("writing curve.csv failed");
 }
 
+void LoadHistorySummary::add(const IncrementRecord& r, double free_surface_depth) {
+  if (r.force > peak_force_) peak_force_ = r.force;
+  peak_depth_ = std::max(peak_depth_, r.alpha);
+  if (!history_.empty()) {
+    const IncrementRecord& previous = history_.back();
+    const bool down = r.alpha < previous.alpha;
+    if (down && !unloading_ && previous.force > 0.0) {
+      // A reversal at `previous`: the first unloading increment's secant is S; the last loading
+      // increment's secant is the loading slope just before it.
+      Unloading u;
+      u.step = previous.step;
+      u.depth = previous.alpha;
+      u.force = previous.force;
+      u.stiffness = (previous.force - r.force) / (previous.alpha - r.alpha);
+      if (history_.size() >= 2) {
+        const IncrementRecord& before = history_[history_.size() - 2];
+        if (before.alpha != previous.alpha)
+          u.loading_stiffness = (previous.force - before.force) / (previous.alpha - before.alpha);
+      }
+      unloadings_.push_back(u);
+    }
+    if (down) unloading_ = true;
+    if (r.alpha > previous.alpha) unloading_ = false;
+    if (unloading_ && !unloadings_.empty() && !unloadings_.back().separated && r.force == 0.0 &&
+        r.contact_nodes == 0) {
+      unloadings_.back().separated = true;
+      unloadings_.back().residual_depth = free_surface_depth;
+      unloadings_.back().separation_step = r.step;
+    }
+  }
+  history_.push_back(r);
+}
+
+std::string LoadHistorySummary::json(const std::string& model) const {
+  std::string out = fmt::format("{{\n  \"model\": \"{}\",\n  \"increments\": {},\n  \"peak_depth\": {:.17g},\n"
+                                "  \"peak_force\": {:.17g},\n  \"unloading\": [",
+                                model, history_.empty() ? 0 : history_.back().step, peak_depth_, peak_force_);
+  for (std::size_t i = 0; i < unloadings_.size(); ++i) {
+    const Unloading& u = unloadings_[i];
+    out += fmt::format("{}\n    {{\"step\": {}, \"depth\": {:.17g}, \"force\": {:.17g}, \"stiffness\": {:.17g}, "
+                       "\"loading_stiffness\": {:.17g}, \"separated\": {}, \"residual_depth\": {}, "
+                       "\"separation_step\": {}}}",
+                       i ? "," : "", u.step, u.depth, u.force, u.stiffness, u.loading_stiffness,
+                       u.separated ? "true" : "false",
+                       u.separated ? fmt::format("{:.17g}", u.residual_depth) : std::string("null"),
+                       u.separated ? std::to_string(u.separation_step) : std::string("null"));
+  }
+  out += unloadings_.empty() ? "]\n}\n" : "\n  ]\n}\n";
+  return out;
+}
+
 RunOutput::RunOutput(const std::filesystem::path& dir, const LoadCase& load_case)
     : dir_(dir),
+      model_(to_string(load_case.material.model)),
       fields_every_(load_case.output.fields_every),
       profile_depths_(load_case.output.profile_depths),
       curve_(dir / "curve.csv"),
@@ -48,6 +100,7 @@ RunOutput::RunOutput(const std::filesystem::path& dir, const LoadCase& load_case
 
 void RunOutput::increment(const Simulation& sim, const IncrementRecord& record) {
   curve_.write(record);
+  summary_.add(record, sim.free_surface_depth());
   last_step_ = record.step;
   if (fields_every_ > 0 && record.step % fields_every_ == 0) write_fields(sim, record.step);
 }
@@ -64,8 +117,9 @@ void RunOutput::finish(const Simulation& sim) {
   if (last_step_ < 0) return;
   if (last_fields_step_ != last_step_) write_fields(sim, last_step_);
   const auto& mesh = sim.mesh();
-  const auto layer = nodal_layer_forces(mesh, sim.element_matrices(), sim.displacement().data());
+  const auto layer = nodal_layer_forces(mesh, sim.bulk());
   write_file_atomically(dir_ / "layers.csv", layers_csv(layer_forces(mesh, layer), sim.contact().force));
+  write_file_atomically(dir_ / "summary.json", summary_.json(model_));
   write_file_atomically(dir_ / "profiles.csv", profiles_csv(mesh, profile_lines(mesh, profile_depths_), layer,
                                                            average_to_nodes(mesh, sim.bulk())));
 }

@@ -4,12 +4,11 @@
 
 namespace indentsim {
 
-std::vector<NodalLayerForces> nodal_layer_forces(const Mesh& mesh, const ElementMatrixSource& matrices,
-                                                 const double* u) {
+std::vector<NodalLayerForces> nodal_layer_forces(const Mesh& mesh, const BulkModel& bulk) {
   std::vector<NodalLayerForces> nodal(static_cast<std::size_t>(mesh.nodes()));
   for (int ei = 0; ei < mesh.elements_x(); ++ei)
     for (int ej = 0; ej < mesh.elements_y(); ++ej) {
-      const ElementVector fe = matrices.element_matrix(ei, ej) * gather(mesh, ei, ej, u);
+      const ElementVector fe = bulk.element_force(ei, ej);
       const auto nodes = mesh.element_nodes(ei, ej);
       // Vertices 2 and 4 are on the line above the element: the element is "below" them.
       for (int vertex : {2, 4}) {
@@ -47,8 +46,8 @@ std::vector<LayerForce> layer_forces(const Mesh& mesh, const std::vector<NodalLa
   return layers;
 }
 
-std::vector<LayerForce> layer_forces(const Mesh& mesh, const ElementMatrixSource& matrices, const double* u) {
-  return layer_forces(mesh, nodal_layer_forces(mesh, matrices, u));
+std::vector<LayerForce> layer_forces(const Mesh& mesh, const BulkModel& bulk) {
+  return layer_forces(mesh, nodal_layer_forces(mesh, bulk));
 }
 
 }  // namespace indentsim

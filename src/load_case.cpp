@@ -254,7 +254,22 @@ LoadCase from_table(const toml::table& root, const std::string& source) {
   r.read_number("material", "n", lc.material.n);
 
   r.read_number_array("load", "path", lc.load.path);
-  r.read_integer("load", "increments", lc.load.increments);
+  if (const toml::node* inc = r.find("load", "increments"); inc && inc->is_array()) {
+    const toml::array& counts = *inc->as_array();
+    lc.load.segment_increments.clear();
+    int total = 0;
+    for (std::size_t i = 0; i < counts.size(); ++i) {
+      auto n = counts.get(i)->value_exact<int64_t>();
+      if (!n || *n < 1 || *n > 10'000'000)
+        r.fail("load.increments", fmt::format("element {} must be an integer in [1, 1e7]", i));
+      lc.load.segment_increments.push_back(static_cast<int>(*n));
+      total += static_cast<int>(*n);
+      if (total > 10'000'000) r.fail("load.increments", "more than 1e7 increments in all");
+    }
+    lc.load.increments = total;
+  } else {
+    r.read_integer("load", "increments", lc.load.increments);
+  }
 
   r.read_integer("mesh", "contact_nodes", lc.mesh.contact_nodes);
   r.read_optional_number("mesh", "contact_half_width", lc.mesh.contact_half_width);
@@ -323,6 +338,9 @@ void validate(const LoadCase& lc) {
   if (lc.max_depth() >= lc.geometry.ly)
     fail("load.path", fmt::format("depth {} is not small against the block depth {}", lc.max_depth(),
                                   lc.geometry.ly));
+  if (!lc.load.segment_increments.empty() && lc.load.segment_increments.size() + 1 != path.size())
+    fail("load.increments", fmt::format("has {} per-segment counts for a path of {} segments",
+                                        lc.load.segment_increments.size(), path.size() - 1));
   if (lc.load.increments < 1) fail("load.increments", fmt::format("must be >= 1 (got {})", lc.load.increments));
   if (lc.load.increments > 10'000'000)
     fail("load.increments", fmt::format("{} is more than 1e7 increments", lc.load.increments));
@@ -363,7 +381,14 @@ std::string to_toml(const LoadCase& lc) {
                    "kappa = {:.17g}\nn = {:.17g}\n\n",
                    to_string(lc.material.model), lc.material.E, lc.material.nu, lc.material.e0,
                    to_string(lc.material.hardening), lc.material.kappa, lc.material.n);
-  t += fmt::format("[load]\npath = {}\nincrements = {}\n\n", numbers(lc.load.path), lc.load.increments);
+  std::string increments = std::to_string(lc.load.increments);
+  if (!lc.load.segment_increments.empty()) {
+    increments = "[";
+    for (std::size_t i = 0; i < lc.load.segment_increments.size(); ++i)
+      increments += fmt::format("{}{}", i ? ", " : "", lc.load.segment_increments[i]);
+    increments += "]";
+  }
+  t += fmt::format("[load]\npath = {}\nincrements = {}\n\n", numbers(lc.load.path), increments);
   t += fmt::format("[mesh]\ncontact_nodes = {}\n", lc.mesh.contact_nodes);
   if (lc.mesh.contact_half_width) t += fmt::format("contact_half_width = {:.17g}\n", *lc.mesh.contact_half_width);
   if (lc.mesh.fine_width) t += fmt::format("fine_width = {:.17g}\n", *lc.mesh.fine_width);

@@ -42,6 +42,17 @@ std::vector<double> plan_increments(const std::vector<double>& path, int increme
   return alphas;
 }
 
+std::vector<double> plan_increments(const LoadInput& load) {
+  if (load.segment_increments.empty()) return plan_increments(load.path, load.increments);
+  std::vector<double> alphas{load.path.front()};
+  for (std::size_t s = 0; s + 1 < load.path.size(); ++s) {
+    const int n = load.segment_increments[s];
+    for (int k = 1; k <= n; ++k)
+      alphas.push_back(k == n ? load.path[s + 1] : load.path[s] + (load.path[s + 1] - load.path[s]) * k / n);
+  }
+  return alphas;
+}
+
 void extrapolate(const std::vector<double>& u_previous, double alpha_previous, const std::vector<double>& u_current,
                  double alpha_current, double alpha_next, std::vector<double>& guess) {
   guess = u_current;

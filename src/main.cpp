@@ -113,7 +113,7 @@ int command_run(const std::string& file, const std::vector<std::string>& overrid
   if (!quiet) print_mesh(sim);
   const fs::path dir = prepare_output_dir(lc);
   RunOutput output(dir, lc);
-  Progress progress(static_cast<int>(plan_increments(lc.load.path, lc.load.increments).size()) - 1, quiet);
+  Progress progress(static_cast<int>(plan_increments(lc.load).size()) - 1, quiet);
   std::size_t warnings_shown = 0;
   const auto show_warnings = [&] {
     for (; warnings_shown < sim.warnings().size(); ++warnings_shown) {

@@ -90,4 +90,88 @@ std::optional<std::string> IlyushinLaw::admissibility_violation() const {
   return std::nullopt;
 }
 
+J2Law::J2Law(const IlyushinLaw& curve)
+    : curve_(curve), bulk_(curve.lame().lambda + 2.0 * curve.lame().mu / 3.0), mu_(curve.lame().mu) {}
+
+double J2Law::yield_stress(double eps_p, double* hardening_modulus) const {
+  // Invert eps_p = e_u omega(e_u) for e_u >= e0 (monotone: its derivative lies in (0, 1)).
+  const double e0 = curve_.elastic_limit();
+  double e_u = e0;
+  if (eps_p > 0.0) {
+    e_u = e0 + eps_p;  // eps_p <= e_u - e0 since d(e_u omega)/de_u < 1: a lower bound
+    for (int it = 0; it < 100; ++it) {
+      const double g = e_u * curve_.omega(e_u) - eps_p;
+      const double dg = curve_.omega(e_u) + e_u * curve_.omega_derivative(e_u);
+      const double next = std::max(e0 * (1 + 1e-15), e_u - g / dg);
+      if (std::abs(next - e_u) <= 1e-15 * e_u) {
+        e_u = next;
+        break;
+      }
+      e_u = next;
+    }
+  }
+  if (hardening_modulus) {
+    // H = (d sigma_u / d e_u) / (d eps_p / d e_u) = 3 mu (1 - d) / d with d = d(e_u omega)/de_u.
+    const double e = std::max(e_u, e0 * (1 + 1e-12));
+    const double d = curve_.omega(e) + e * curve_.omega_derivative(e);
+    *hardening_modulus = 3.0 * mu_ * (1.0 - d) / d;
+  }
+  return curve_.stress_intensity(e_u);
+}
+
+J2Response J2Law::respond(const VoigtVector& strain, const J2State& old) const {
+  J2Response r;
+  r.state = old;
+  const double trace = strain[0] + strain[1];
+  // Deviatoric total strain as a tensor (11, 22, 33, 12), eps33 = 0.
+  const Eigen::Vector4d e(strain[0] - trace / 3.0, strain[1] - trace / 3.0, -trace / 3.0, 0.5 * strain[2]);
+  const auto tensor_norm = [](const Eigen::Vector4d& t) {
+    return std::sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2] + 2.0 * t[3] * t[3]);
+  };
+  const Eigen::Vector4d trial = 2.0 * mu_ * (e - old.plastic_strain);
+  const double trial_norm = tensor_norm(trial);
+  const double trial_equivalent = std::sqrt(1.5) * trial_norm;
+  double hardening = 0.0;
+  const double yield = yield_stress(old.equivalent_plastic_strain, &hardening);
+
+  Eigen::Vector4d deviator = trial;
+  double theta = 1.0, theta_bar = 0.0;
+  Eigen::Vector4d n = Eigen::Vector4d::Zero();
+  if (trial_equivalent > yield * (1.0 + 1e-14)) {
+    // Radial return: sigma_eq_trial - 3 mu dgamma - sigma_y(eps_p + dgamma) = 0.
+    double dgamma = 0.0;
+    for (int it = 0; it < 100; ++it) {
+      double h = 0.0;
+      const double residual = trial_equivalent - 3.0 * mu_ * dgamma - yield_stress(old.equivalent_plastic_strain + dgamma, &h);
+      const double step = residual / (3.0 * mu_ + h);
+      dgamma += step;
+      hardening = h;
+      if (std::abs(step) <= 1e-15 * (old.equivalent_plastic_strain + dgamma) + 1e-300) break;
+    }
+    yield_stress(old.equivalent_plastic_strain + dgamma, &hardening);
+    n = trial / trial_norm;
+    deviator = trial - 2.0 * mu_ * std::sqrt(1.5) * dgamma * n;
+    r.state.plastic_strain += std::sqrt(1.5) * dgamma * n;
+    r.state.equivalent_plastic_strain += dgamma;
+    r.plastic = true;
+    theta = 1.0 - 3.0 * mu_ * dgamma / trial_equivalent;
+    theta_bar = 1.0 / (1.0 + hardening / (3.0 * mu_)) - (1.0 - theta);
+  }
+  const double pressure = bulk_ * trace;
+  r.stress = VoigtVector(pressure + deviator[0], pressure + deviator[1], deviator[3]);
+  r.stress33 = pressure + deviator[2];
+  r.equivalent_stress = std::sqrt(1.5) * tensor_norm(deviator);
+
+  // C = K I(x)I + 2 mu theta I_dev - 2 mu theta_bar n(x)n on (11, 22, gamma12).
+  const double m = mu_ * theta;
+  r.tangent << bulk_ + 4.0 / 3.0 * m, bulk_ - 2.0 / 3.0 * m, 0.0,  //
+      bulk_ - 2.0 / 3.0 * m, bulk_ + 4.0 / 3.0 * m, 0.0,           //
+      0.0, 0.0, m;
+  if (r.plastic) {
+    const Eigen::Vector3d nv(n[0], n[1], n[3]);
+    r.tangent -= 2.0 * mu_ * theta_bar * nv * nv.transpose();
+  }
+  return r;
+}
+
 }  // namespace indentsim

@@ -4,35 +4,113 @@
 
 namespace indentsim {
 
-IlyushinBulk::IlyushinBulk(const ElasticStiffness& elastic, const IlyushinLaw& law)
+// ---------------------------------------------------------------------------------------------
+IlyushinPointLaw::IlyushinPointLaw(const IlyushinLaw& law, bool unloading_rule, std::size_t points)
+    : law_(law),
+      unloading_rule_(unloading_rule),
+      elastic_(law.elastic().stiffness()),
+      peak_strain_(points, VoigtVector::Zero()),
+      peak_intensity_(points, 0.0) {}
+
+bool IlyushinPointLaw::elastic(std::size_t point, const VoigtVector& strain) const {
+  // Loading: the secant law has no history.  Unloading: the branch sigma(eps*) + D (eps - eps*)
+  // is D eps exactly when eps* itself was elastic.
+  if (loading_) return strain_intensity(strain) <= law_.elastic_limit();
+  return peak_intensity_[point] <= law_.elastic_limit();
+}
+
+PointResponse IlyushinPointLaw::respond(std::size_t point, const VoigtVector& strain) const {
+  PointResponse r;
+  if (loading_) {
+    const SecantResponse s = law_.respond(strain);
+    r = {s.stress, s.stress33, s.tangent, s.strain_intensity, s.omega, s.plastic};
+    return r;
+  }
+  // Elastic unloading (or reloading) from the peak state.
+  const VoigtVector& peak = peak_strain_[point];
+  const SecantResponse at_peak = law_.respond(peak);
+  const VoigtVector change = strain - peak;
+  r.stress = at_peak.stress + elastic_ * change;
+  r.stress33 = at_peak.stress33 + law_.lame().lambda * (change[0] + change[1]);
+  r.tangent = elastic_;
+  r.strain_intensity = strain_intensity(strain);
+  r.omega = at_peak.omega;
+  r.plastic = false;
+  return r;
+}
+
+void IlyushinPointLaw::commit(std::size_t point, const VoigtVector& strain) {
+  if (!loading_) return;
+  peak_strain_[point] = strain;
+  peak_intensity_[point] = strain_intensity(strain);
+}
+
+// ---------------------------------------------------------------------------------------------
+J2PointLaw::J2PointLaw(const J2Law& law, std::size_t points)
+    : law_(law), initial_yield_(law.yield_stress(0.0)), state_(points) {}
+
+bool J2PointLaw::elastic(std::size_t point, const VoigtVector& strain) const {
+  if (state_[point].equivalent_plastic_strain > 0.0) return false;
+  // Virgin point: elastic while the von Mises stress of D eps stays below the initial yield
+  // stress, i.e. while 3 mu e_u <= sigma_y(0).
+  return 3.0 * law_.curve().lame().mu * strain_intensity(strain) <= initial_yield_;
+}
+
+PointResponse J2PointLaw::respond(std::size_t point, const VoigtVector& strain) const {
+  const J2Response j = law_.respond(strain, state_[point]);
+  PointResponse r;
+  r.stress = j.stress;
+  r.stress33 = j.stress33;
+  r.tangent = j.tangent;
+  r.strain_intensity = strain_intensity(strain);
+  r.plastic = j.plastic;
+  // The secant softening of the equivalent Ilyushin state, for display: 1 - sigma_eq / (3 mu e_u).
+  r.omega = r.strain_intensity > 0 ? std::max(0.0, 1.0 - j.equivalent_stress / (3.0 * law_.curve().lame().mu *
+                                                                                  r.strain_intensity))
+                                   : 0.0;
+  return r;
+}
+
+void J2PointLaw::commit(std::size_t point, const VoigtVector& strain) {
+  state_[point] = law_.respond(strain, state_[point]).state;
+}
+
+// ---------------------------------------------------------------------------------------------
+InelasticBulk::InelasticBulk(const ElasticStiffness& elastic, std::unique_ptr<PointLaw> law)
     : elastic_(elastic),
       mesh_(elastic.mesh()),
       pattern_(elastic.pattern()),
-      law_(law),
-      committed_u_(static_cast<std::size_t>(elastic.mesh().equations()), 0.0),
-      strain_intensity_(4 * static_cast<std::size_t>(elastic.mesh().elements()), 0.0) {}
+      law_(std::move(law)),
+      committed_u_(static_cast<std::size_t>(elastic.mesh().equations()), 0.0) {}
 
-bool IlyushinBulk::yields(int ei, int ej, const double* u, std::array<VoigtVector, 4>& strains) const {
+bool InelasticBulk::inelastic(int ei, int ej, const double* u, std::array<VoigtVector, 4>& strains) const {
   strains = gauss_point_strains(mesh_, ei, ej, u);
-  for (const VoigtVector& s : strains)
-    if (strain_intensity(s) > law_.elastic_limit()) return true;
+  const std::size_t first = 4 * static_cast<std::size_t>(mesh_.element(ei, ej));
+  for (std::size_t g = 0; g < 4; ++g)
+    if (!law_->elastic(first + g, strains[g])) return true;
   return false;
 }
 
-void IlyushinBulk::internal_force(const double* u, double* f) {
-  elastic_.multiply(u, f);
+ElementVector InelasticBulk::element_force(int ei, int ej, const std::array<VoigtVector, 4>& strains) const {
+  const Rectangle rect = mesh_.rectangle(ei, ej);
+  const std::size_t first = 4 * static_cast<std::size_t>(mesh_.element(ei, ej));
   const auto& points = gauss_points_2x2();
+  ElementVector fe = ElementVector::Zero();
+  for (std::size_t g = 0; g < points.size(); ++g) {
+    const StrainDisplacement b = strain_displacement(rect, points[g].xi, points[g].eta);
+    fe.noalias() += (points[g].weight * rect.width * rect.height) * b.transpose() * law_->respond(first + g, strains[g]).stress;
+  }
+  return fe;
+}
+
+void InelasticBulk::internal_force(const double* u, double* f) {
+  elastic_.multiply(u, f);
   std::array<VoigtVector, 4> strains;
   for (int ei = 0; ei < mesh_.elements_x(); ++ei)
     for (int ej = 0; ej < mesh_.elements_y(); ++ej) {
-      if (!yields(ei, ej, u, strains)) continue;
+      if (!inelastic(ei, ej, u, strains)) continue;
       // Correction f_e(u) - K_e^elastic u_e, scattered onto the free equations.
-      const Rectangle rect = mesh_.rectangle(ei, ej);
-      ElementVector fe = -(elastic_.cached_matrix(ei, ej) * gather(mesh_, ei, ej, u));
-      for (std::size_t g = 0; g < points.size(); ++g) {
-        const StrainDisplacement b = strain_displacement(rect, points[g].xi, points[g].eta);
-        fe.noalias() += (points[g].weight * rect.width * rect.height) * b.transpose() * law_.respond(strains[g]).stress;
-      }
+      const ElementVector fe = element_force(ei, ej, strains) - elastic_.cached_matrix(ei, ej) * gather(mesh_, ei, ej, u);
       const auto dofs = mesh_.element_dofs(ei, ej);
       for (int a = 0; a < 8; ++a) {
         const int eq = mesh_.equation(dofs[a]);
@@ -41,16 +119,16 @@ void IlyushinBulk::internal_force(const double* u, double* f) {
     }
 }
 
-void IlyushinBulk::tangent(const double* u, double* values) {
+void InelasticBulk::tangent(const double* u, double* values) {
   const auto& k = elastic_.values();
   std::copy(k.begin(), k.end(), values);
-  const auto& points = gauss_points_2x2();
   std::array<VoigtVector, 4> strains;
   for (int ei = 0; ei < mesh_.elements_x(); ++ei)
     for (int ej = 0; ej < mesh_.elements_y(); ++ej) {
-      if (!yields(ei, ej, u, strains)) continue;
+      if (!inelastic(ei, ej, u, strains)) continue;
+      const std::size_t first = 4 * static_cast<std::size_t>(mesh_.element(ei, ej));
       std::array<PlaneStrainMatrix, 4> d;
-      for (std::size_t g = 0; g < points.size(); ++g) d[g] = law_.respond(strains[g]).tangent;
+      for (std::size_t g = 0; g < 4; ++g) d[g] = law_->respond(first + g, strains[g]).tangent;
       const ElementMatrix correction = gauss_stiffness(mesh_.rectangle(ei, ej), d) - elastic_.cached_matrix(ei, ej);
       const std::int32_t* pos = pattern_.element_positions(mesh_.element(ei, ej));
       for (int a = 0; a < 8; ++a)
@@ -59,44 +137,38 @@ void IlyushinBulk::tangent(const double* u, double* values) {
     }
 }
 
-void IlyushinBulk::commit(const double* u) {
+void InelasticBulk::commit(const double* u) {
   std::copy(u, u + committed_u_.size(), committed_u_.begin());
-  yielded_.clear();
   plastic_points_ = 0;
   max_strain_intensity_ = 0.0;
   for (int ei = 0; ei < mesh_.elements_x(); ++ei)
     for (int ej = 0; ej < mesh_.elements_y(); ++ej) {
       const auto strains = gauss_point_strains(mesh_, ei, ej, u);
-      bool element_yielded = false;
-      for (int g = 0; g < 4; ++g) {
-        const double e_u = strain_intensity(strains[g]);
-        strain_intensity_[4 * static_cast<std::size_t>(mesh_.element(ei, ej)) + g] = e_u;
-        max_strain_intensity_ = std::max(max_strain_intensity_, e_u);
-        if (e_u > law_.elastic_limit()) {
-          ++plastic_points_;
-          element_yielded = true;
-        }
+      const std::size_t first = 4 * static_cast<std::size_t>(mesh_.element(ei, ej));
+      for (std::size_t g = 0; g < 4; ++g) {
+        max_strain_intensity_ = std::max(max_strain_intensity_, strain_intensity(strains[g]));
+        law_->commit(first + g, strains[g]);
+        if (law_->has_yielded(first + g)) ++plastic_points_;
       }
-      if (element_yielded) yielded_.push_back(mesh_.element(ei, ej));
     }
 }
 
-std::array<GaussPointState, 4> IlyushinBulk::gauss_point_states(int ei, int ej) const {
+std::array<GaussPointState, 4> InelasticBulk::gauss_point_states(int ei, int ej) const {
   const auto strains = gauss_point_strains(mesh_, ei, ej, committed_u_.data());
+  const std::size_t first = 4 * static_cast<std::size_t>(mesh_.element(ei, ej));
   std::array<GaussPointState, 4> states;
-  for (int g = 0; g < 4; ++g) {
-    const SecantResponse r = law_.respond(strains[g]);
-    states[g] = {r.stress, r.stress33, r.strain_intensity, r.omega, r.plastic};
+  for (std::size_t g = 0; g < 4; ++g) {
+    const PointResponse r = law_->respond(first + g, strains[g]);
+    states[g] = {r.stress, r.stress33, r.strain_intensity, r.omega, law_->has_yielded(first + g)};
   }
   return states;
 }
 
-ElementMatrix IlyushinBulk::element_matrix(int ei, int ej) const {
+ElementVector InelasticBulk::element_force(int ei, int ej) const {
   std::array<VoigtVector, 4> strains;
-  if (!yields(ei, ej, committed_u_.data(), strains)) return elastic_.cached_matrix(ei, ej);
-  std::array<PlaneStrainMatrix, 4> d;
-  for (int g = 0; g < 4; ++g) d[g] = law_.respond(strains[g]).secant;
-  return gauss_stiffness(mesh_.rectangle(ei, ej), d);
+  if (!inelastic(ei, ej, committed_u_.data(), strains))
+    return elastic_.cached_matrix(ei, ej) * gather(mesh_, ei, ej, committed_u_.data());
+  return element_force(ei, ej, strains);
 }
 
 }  // namespace indentsim

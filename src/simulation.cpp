@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <optional>
 
 #include <fmt/format.h>
@@ -37,16 +38,21 @@ double pilot_contact_half_width(const LoadCase& lc) {
   return widest > 0.0 ? std::min(chord, 1.05 * widest) : chord;
 }
 
+// Deformation theory is exact for monotone loading; Ilyushin's unloading rule is switched on
+// only when the load path itself unloads (a scene that never unloads does not pay for it).
+bool unloads(const std::vector<double>& path) {
+  for (std::size_t k = 1; k < path.size(); ++k)
+    if (path[k] < path[k - 1]) return true;
+  return false;
+}
+
 }  // namespace
 
 Simulation::Simulation(LoadCase load_case) : load_case_(std::move(load_case)) {
   const auto& m = load_case_.material;
-  if (m.model == MaterialModel::j2)
-    throw InputError(load_case_.source, "material.model",
-                     "\"j2\" is not available in this version (use \"elastic\" or \"ilyushin\")");
   const ElasticMaterial material{m.E, m.nu};
   std::optional<IlyushinLaw> law;
-  if (m.model == MaterialModel::ilyushin) {
+  if (m.model != MaterialModel::elastic) {
     law.emplace(material, m.e0, m.hardening, m.kappa, m.n);
     if (auto violation = law->admissibility_violation())
       throw InputError(load_case_.source, m.hardening == HardeningLaw::linear ? "material.kappa" : "material.n",
@@ -59,7 +65,11 @@ Simulation::Simulation(LoadCase load_case) : load_case_(std::move(load_case)) {
   stiffness_ = std::make_unique<ElasticStiffness>(*mesh_, material, *pattern_);
   bulk_ = stiffness_.get();
   if (law) {
-    plastic_ = std::make_unique<IlyushinBulk>(*stiffness_, *law);
+    const std::size_t points = 4 * static_cast<std::size_t>(mesh_->elements());
+    std::unique_ptr<PointLaw> point_law;
+    if (m.model == MaterialModel::j2) point_law = std::make_unique<J2PointLaw>(J2Law(*law), points);
+    else point_law = std::make_unique<IlyushinPointLaw>(*law, unloads(load_case_.load.path), points);
+    plastic_ = std::make_unique<InelasticBulk>(*stiffness_, std::move(point_law));
     bulk_ = plastic_.get();
   }
   contact_ = std::make_unique<ContactBoundary>(*mesh_, CylindricalPunch{load_case_.punch.radius}, *pattern_,
@@ -79,7 +89,7 @@ Simulation::Simulation(LoadCase load_case) : load_case_(std::move(load_case)) {
 Simulation::~Simulation() = default;
 
 void Simulation::run(const std::function<void(const IncrementRecord&)>& on_increment) {
-  const std::vector<double> targets = plan_increments(load_case_.load.path, load_case_.load.increments);
+  const std::vector<double> targets = plan_increments(load_case_.load);
   for (double target : targets) {
     const IncrementRecord r = advance_to(target);
     if (on_increment) on_increment(r);
@@ -102,6 +112,9 @@ IncrementRecord Simulation::advance_to(double target) {
     // Full semi-smooth Newton steps first, for a quarter of the iteration budget (a converging
     // increment needs far fewer; one that wanders is better handed on); then the same increment
     // with KINSOL's line search and the whole budget; only then a cutback.
+    // Laws that follow the global load history (Ilyushin's unloading rule) need to know whether
+    // this trial goes beyond the deepest point so far.
+    if (plastic_) plastic_->set_loading(trial >= deepest_);
     bool converged = false;
     const int plain_budget = std::max(8, load_case_.solver.max_newton / 4);
     for (Globalization g : {Globalization::none, Globalization::line_search}) {
@@ -118,6 +131,8 @@ IncrementRecord Simulation::advance_to(double target) {
       alpha_previous_ = alpha_;
       alpha_ = trial;
       has_previous_ = true;
+      deepest_ = std::max(deepest_, alpha_);
+      bulk_->commit(u_.data());  // history moves with every converged (sub-)step
       if (trial == target) break;
       // Grow the sub-step back after an easy one.
       if (report.iterations <= 3) step *= 2.0;
@@ -165,8 +180,14 @@ double Simulation::contact_half_width() const {
   return indentsim::contact_half_width(*contact_, contact());
 }
 
+double Simulation::free_surface_depth() const {
+  double depth = -std::numeric_limits<double>::infinity();
+  for (const auto& c : contact_->candidates()) depth = std::max(depth, -u_[c.equation] - c.surface_height);
+  return depth;
+}
+
 std::vector<LayerForce> Simulation::layer_forces() const {
-  return indentsim::layer_forces(*mesh_, *bulk_, u_.data());
+  return indentsim::layer_forces(*mesh_, *bulk_);
 }
 
 void Simulation::check_fine_zone(double half_width) {
@@ -179,7 +200,6 @@ void Simulation::check_fine_zone(double half_width) {
 }
 
 IncrementRecord Simulation::record(double wall_seconds, long iterations, long factorizations, int cutbacks) {
-  bulk_->commit(u_.data());
   const ContactResult c = contact();
   IncrementRecord r;
   r.step = rows_++;

@@ -19,7 +19,7 @@ namespace {
 
 void expect_finite_difference_equations_hold(const Simulation& sim) {
   const Mesh& mesh = sim.mesh();
-  const auto layer = nodal_layer_forces(mesh, sim.element_matrices(), sim.displacement().data());
+  const auto layer = nodal_layer_forces(mesh, sim.bulk());
   // Scale: the largest nodal layer force anywhere.
   double scale = 0;
   for (const auto& l : layer) scale = std::max({scale, std::abs(l.normal_below), std::abs(l.tangential_below)});
@@ -56,7 +56,7 @@ TEST(FiniteDifferenceView, LayerEquationsVanishAtInteriorNodesPlastic) {
 TEST(FiniteDifferenceView, TopLayerForceIsTheContactReaction) {
   Simulation sim(shipped_case("deep_plastic.toml", {"load.increments=3", "mesh.contact_nodes=8"}));
   sim.run();
-  const auto layer = nodal_layer_forces(sim.mesh(), sim.element_matrices(), sim.displacement().data());
+  const auto layer = nodal_layer_forces(sim.mesh(), sim.bulk());
   const ContactResult c = sim.contact();
   const auto& cs = sim.contact_boundary().candidates();
   for (std::size_t k = 0; k < cs.size(); ++k) {
@@ -78,7 +78,7 @@ double layer_pressure_error(int contact_nodes) {
   sim.run();
   const auto& lc = sim.load_case();
   const double e_star = lc.material.E / (1 - lc.material.nu * lc.material.nu);
-  const auto layer = nodal_layer_forces(sim.mesh(), sim.element_matrices(), sim.displacement().data());
+  const auto layer = nodal_layer_forces(sim.mesh(), sim.bulk());
   const ContactResult c = sim.contact();
   const double a = hertz::half_width(c.force, lc.punch.radius, e_star);
   const double p0 = 2 * c.force / (std::numbers::pi * a);

@@ -102,3 +102,62 @@ TEST(Ilyushin, AdmissibilityHoldsForValidLawsAndCatchesABadOne) {
   // kappa = 1 is perfect plasticity: d(e_u omega)/de_u = 1, outside Ilyushin's conditions.
   EXPECT_TRUE(IlyushinLaw(steel, 0.027, HardeningLaw::linear, 1.0, 0.3).admissibility_violation());
 }
+
+namespace {
+const IlyushinLaw j2_curves[] = {IlyushinLaw(steel, 0.004, HardeningLaw::linear, 0.9, 0.3),
+                                 IlyushinLaw(steel, 0.004, HardeningLaw::power, 0.9, 0.2)};
+}
+
+TEST(J2, ProportionalStrainPathReproducesIlyushinExactly) {
+  for (const IlyushinLaw& curve : j2_curves) {
+    const J2Law j2(curve);
+    for (const VoigtVector& direction : {VoigtVector(1.0, -0.4, 0.3), VoigtVector(-1.0, -0.2, 0.0),
+                                        VoigtVector(0.1, 0.2, 1.0)}) {
+      const VoigtVector final_strain = strain_with_intensity(direction, 12 * curve.elastic_limit());
+      J2State state;
+      for (int step = 1; step <= 40; ++step) {
+        const VoigtVector strain = final_strain * (step / 40.0);
+        const J2Response r = j2.respond(strain, state);
+        state = r.state;
+        const SecantResponse ilyushin = curve.respond(strain);
+        EXPECT_LE((r.stress - ilyushin.stress).norm(), 1e-10 * ilyushin.stress.norm()) << "step " << step;
+        EXPECT_NEAR(r.stress33, ilyushin.stress33, 1e-10 * ilyushin.stress.norm());
+        EXPECT_EQ(r.plastic, ilyushin.plastic);
+      }
+      // In one step as well: radial return from the virgin state lands on the same point.
+      const J2Response once = j2.respond(final_strain, J2State{});
+      EXPECT_LE((once.stress - curve.respond(final_strain).stress).norm(), 1e-10 * once.stress.norm());
+    }
+  }
+}
+
+TEST(J2, ReturnMappingTangentMatchesFiniteDifferences) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> component(-1.0, 1.0);
+  for (const IlyushinLaw& curve : j2_curves) {
+    const J2Law j2(curve);
+    for (int trial = 0; trial < 40; ++trial) {
+      // A history from a first plastic step, then a step in another direction.
+      const VoigtVector first = strain_with_intensity(VoigtVector(component(rng), component(rng), component(rng)),
+                                                      5 * curve.elastic_limit());
+      const J2State old = j2.respond(first, J2State{}).state;
+      for (double size : {0.2, 3.0}) {  // an elastic unloading step and a plastic step
+        const VoigtVector strain =
+            first + strain_with_intensity(VoigtVector(component(rng), component(rng), component(rng)),
+                                          size * curve.elastic_limit());
+        const J2Response r = j2.respond(strain, old);
+        PlaneStrainMatrix fd;
+        const double h = 1e-7 * strain.norm();
+        for (int j = 0; j < 3; ++j) {
+          VoigtVector plus = strain, minus = strain;
+          plus[j] += h;
+          minus[j] -= h;
+          fd.col(j) = (j2.respond(plus, old).stress - j2.respond(minus, old).stress) / (2 * h);
+        }
+        const double scale = r.tangent.cwiseAbs().maxCoeff();
+        EXPECT_LE((r.tangent - fd).cwiseAbs().maxCoeff(), 1e-6 * scale)
+            << "plastic " << r.plastic << "\n" << r.tangent << "\n" << fd;
+      }
+    }
+  }
+}

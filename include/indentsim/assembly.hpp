@@ -43,14 +43,6 @@ private:
 /// Gathers an element's 8 unknowns (paper order) from the vector of free equations.
 ElementVector gather(const Mesh& mesh, int ei, int ej, const double* u);
 
-/// Where the current element matrices come from: the elastic cache, or (for plastic models)
-/// the secant matrices of the current state.
-class ElementMatrixSource {
-public:
-  virtual ~ElementMatrixSource() = default;
-  virtual ElementMatrix element_matrix(int ei, int ej) const = 0;
-};
-
 /// The material state at one Gauss point of the committed solution.
 struct GaussPointState {
   VoigtVector stress = VoigtVector::Zero();  ///< (sigma11, sigma22, sigma12) [Pa]
@@ -61,10 +53,10 @@ struct GaussPointState {
 };
 
 /// The bulk part of the discrete equations: internal forces f(u) and their tangent df/du in the
-/// fixed pattern.  Also an ElementMatrixSource: the current (secant) element matrices K_e with
-/// f_e = K_e u_e at the committed state, for the layer forces.
-class BulkModel : public ElementMatrixSource {
+/// fixed pattern, and the committed state for output.
+class BulkModel {
 public:
+  virtual ~BulkModel() = default;
   /// f = f_int(u) over the free equations.
   virtual void internal_force(const double* u, double* f) = 0;
   /// values = d f_int / du at u, in the fixed pattern.
@@ -77,6 +69,10 @@ public:
   virtual double max_strain_intensity() const = 0;
   /// States at the four Gauss points of element (ei, ej), committed solution (paper vertex order).
   virtual std::array<GaussPointState, 4> gauss_point_states(int ei, int ej) const = 0;
+  /// Internal force vector of element (ei, ej) at the committed state (paper order).  For the
+  /// elastic and secant laws it is K_e u_e with the current (secant) local stiffness matrix: the
+  /// rows the paper's layer forces are made of.
+  virtual ElementVector element_force(int ei, int ej) const = 0;
 };
 
 /// Linear elasticity on the mesh: one closed-form matrix per pair of element size classes
@@ -85,7 +81,7 @@ class ElasticStiffness : public BulkModel {
 public:
   ElasticStiffness(const Mesh& mesh, const ElasticMaterial& material, const StiffnessPattern& pattern);
 
-  ElementMatrix element_matrix(int ei, int ej) const override;
+  ElementVector element_force(int ei, int ej) const override;
   void internal_force(const double* u, double* f) override { pattern_.multiply(values_, u, f); }
   void tangent(const double*, double* values) override { std::copy(values_.begin(), values_.end(), values); }
   void commit(const double* u) override;

@@ -30,11 +30,41 @@ private:
 
 class Simulation;
 
+/// What indentation users read off a load history (DIR/summary.json): the peak, and for every
+/// unloading branch the unloading stiffness S = dP/dalpha at its start and the residual depth
+/// where the punch leaves the surface.
+class LoadHistorySummary {
+public:
+  struct Unloading {
+    int step = 0;                       ///< the increment where unloading starts (the reversal)
+    double depth = 0.0, force = 0.0;    ///< state at the reversal
+    double stiffness = 0.0;             ///< S: secant of the first unloading increment [N/m per m]
+    double loading_stiffness = 0.0;     ///< secant of the last loading increment before it
+    bool separated = false;             ///< the punch left the surface on this branch
+    double residual_depth = 0.0;        ///< depth where it left: max_k(-v_k - g_k) once P = 0 [m]
+    int separation_step = -1;
+  };
+
+  /// Feed every converged increment in order, with Simulation::free_surface_depth() at it.
+  void add(const IncrementRecord& record, double free_surface_depth);
+  std::string json(const std::string& model) const;
+  const std::vector<Unloading>& unloadings() const { return unloadings_; }
+  double peak_depth() const { return peak_depth_; }
+  double peak_force() const { return peak_force_; }
+
+private:
+  std::vector<IncrementRecord> history_;
+  std::vector<Unloading> unloadings_;
+  double peak_depth_ = 0.0, peak_force_ = 0.0;
+  bool unloading_ = false;
+};
+
 /// Everything a run writes into its output folder, as the run goes:
 ///   case.toml      the load case as run (every key explicit);
 ///   curve.csv      one row per converged increment (CurveWriter);
 ///   fields.pvd, fields/step_*.vtu   every output.fields_every increments and the final state;
-///   layers.csv, profiles.csv        the paper's layer view of the final state.
+///   layers.csv, profiles.csv        the paper's layer view of the final state;
+///   summary.json   peak, unloading stiffness and residual depth of each unloading branch.
 class RunOutput {
 public:
   RunOutput(const std::filesystem::path& dir, const LoadCase& load_case);
@@ -46,6 +76,8 @@ private:
   void write_fields(const Simulation& sim, int step);
 
   std::filesystem::path dir_;
+  std::string model_;
+  LoadHistorySummary summary_;
   int fields_every_ = 0;
   std::vector<double> profile_depths_;
   CurveWriter curve_;

@@ -28,9 +28,8 @@ struct NodalLayerForces {
   double tangential_below = 0.0, tangential_above = 0.0;
 };
 
-/// Layer forces at every node, indexed by Mesh::node(i, j).
-std::vector<NodalLayerForces> nodal_layer_forces(const Mesh& mesh, const ElementMatrixSource& matrices,
-                                                 const double* u);
+/// Layer forces at every node of the committed state, indexed by Mesh::node(i, j).
+std::vector<NodalLayerForces> nodal_layer_forces(const Mesh& mesh, const BulkModel& bulk);
 
 /// Tributary width of node i along x: half of each adjacent element (one half at the ends) [m].
 double tributary_width(const Mesh& mesh, int i);
@@ -45,6 +44,6 @@ struct LayerForce {
 
 /// Layer forces for every horizontal mesh line, both halves of the model, per unit thickness.
 std::vector<LayerForce> layer_forces(const Mesh& mesh, const std::vector<NodalLayerForces>& nodal);
-std::vector<LayerForce> layer_forces(const Mesh& mesh, const ElementMatrixSource& matrices, const double* u);
+std::vector<LayerForce> layer_forces(const Mesh& mesh, const BulkModel& bulk);
 
 }  // namespace indentsim

@@ -33,6 +33,9 @@ struct MaterialInput {
 struct LoadInput {
   std::vector<double> path{0.0, 5e-5};  ///< indentation depth waypoints alpha [m], from 0
   int increments = 10;                  ///< total increments along the path
+  /// Optional per-segment counts (`increments = [n1, n2, ...]`, one per segment of the path);
+  /// empty when `increments` is a single total spread by segment length.
+  std::vector<int> segment_increments;
 };
 
 struct MeshInput {

@@ -2,12 +2,16 @@
 // The load path: the depth alpha is stepped along piecewise-linear waypoints.
 #include <vector>
 
+#include "indentsim/load_case.hpp"
+
 namespace indentsim {
 
 /// Depths at the end of each planned increment (alpha_0 = 0 first, then `increments` values).
 /// Increments are spread over the segments in proportion to their length |delta alpha|
 /// (largest-remainder rounding, at least one per non-empty segment), uniform within a segment.
 std::vector<double> plan_increments(const std::vector<double>& path, int increments);
+/// The same, honouring per-segment counts when the load case gives them.
+std::vector<double> plan_increments(const LoadInput& load);
 
 /// One converged increment, as written to curve.csv.
 struct IncrementRecord {

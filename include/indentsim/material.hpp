@@ -84,4 +84,39 @@ private:
   double kappa_ = 0.0, n_ = 0.0;
 };
 
+/// History of one Gauss point for J2 flow theory.
+struct J2State {
+  Eigen::Vector4d plastic_strain = Eigen::Vector4d::Zero();  ///< tensor components (11, 22, 33, 12)
+  double equivalent_plastic_strain = 0.0;                    ///< hardening variable
+};
+
+struct J2Response {
+  VoigtVector stress = VoigtVector::Zero();
+  double stress33 = 0.0;
+  J2State state;                 ///< the updated history (to be committed if the increment converges)
+  bool plastic = false;          ///< the step yielded
+  double equivalent_stress = 0.0;
+  PlaneStrainMatrix tangent = PlaneStrainMatrix::Zero();  ///< consistent (algorithmic) tangent
+};
+
+/// Incremental J2 flow theory with isotropic hardening, plane strain.  Its hardening curve is the
+/// uniaxial curve of an Ilyushin law: on proportional loading the equivalent plastic strain is
+/// eps_p = e_u omega(e_u) and the yield stress sigma_y = sigma_u(e_u) = 3 mu (1 - omega) e_u, so
+/// both models give the same stress (the conditions 0 < d(e_u omega)/de_u < 1 make the map
+/// monotone and the hardening modulus positive).  Radial return (Simo and Hughes, Computational
+/// Inelasticity, section 3.3) with its consistent tangent.
+class J2Law {
+public:
+  explicit J2Law(const IlyushinLaw& curve);
+  /// Yield stress and hardening modulus d sigma_y / d eps_p at equivalent plastic strain eps_p.
+  double yield_stress(double equivalent_plastic_strain, double* hardening_modulus = nullptr) const;
+  /// Stress at total strain `strain` from the committed history `old`.
+  J2Response respond(const VoigtVector& strain, const J2State& old) const;
+  const IlyushinLaw& curve() const { return curve_; }
+
+private:
+  IlyushinLaw curve_;
+  double bulk_ = 0.0, mu_ = 0.0;
+};
+
 }  // namespace indentsim

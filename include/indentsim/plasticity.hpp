@@ -1,12 +1,14 @@
 #pragma once
-// Ilyushin's small elasto-plastic deformations on the mesh (MODEL.md, "Material").
+// Inelastic bulk models on the mesh: Ilyushin's deformation theory (MODEL.md, "Material"), with
+// Ilyushin's unloading rule when the load path unloads, and incremental J2 flow theory.
 //
 // Only what the scene needs: the elastic stiffness K (cached closed-form element matrices) is
 // assembled once per mesh, and the bulk response is K u plus a correction from the elements
-// that have yielded.  An element whose four Gauss points are all below the elastic limit
-// contributes exactly its cached elastic matrix, so below the limit the result is the
-// elastic model's, bit for bit.  Yielded elements are integrated with 2x2 Gauss points: the
-// secant stress for the residual, the consistent tangent for the Jacobian.
+// with an inelastic Gauss point (yielding now, or carrying history).  An element whose four
+// Gauss points are elastic contributes exactly its cached matrix, so below the elastic limit
+// the result is the elastic model's.  Inelastic elements are integrated with 2x2 Gauss points:
+// stresses for the residual, consistent tangents for the Jacobian.
+#include <memory>
 #include <vector>
 
 #include "indentsim/assembly.hpp"
@@ -14,36 +16,101 @@
 
 namespace indentsim {
 
-class IlyushinBulk : public BulkModel {
+/// The response of one Gauss point, with its committed history.
+struct PointResponse {
+  VoigtVector stress = VoigtVector::Zero();
+  double stress33 = 0.0;
+  PlaneStrainMatrix tangent = PlaneStrainMatrix::Zero();
+  double strain_intensity = 0.0;
+  double omega = 0.0;
+  bool plastic = false;  ///< on a plastic branch now
+};
+
+/// A material law with history at every Gauss point of the mesh (index = 4 * element + point).
+class PointLaw {
 public:
-  IlyushinBulk(const ElasticStiffness& elastic, const IlyushinLaw& law);
+  virtual ~PointLaw() = default;
+  /// True when the point responds exactly elastically at `strain` (no yielding, no history).
+  virtual bool elastic(std::size_t point, const VoigtVector& strain) const = 0;
+  virtual PointResponse respond(std::size_t point, const VoigtVector& strain) const = 0;
+  /// Accepts `strain` as the converged state of the point.
+  virtual void commit(std::size_t point, const VoigtVector& strain) = 0;
+  /// The point has yielded at some time.
+  virtual bool has_yielded(std::size_t point) const = 0;
+  /// Whether the load path is beyond its deepest point so far (for laws whose branch follows
+  /// the global load history); incremental laws ignore it.
+  virtual void set_loading(bool /*beyond_previous_peak*/) {}
+};
+
+/// Ilyushin's deformation theory.  Without unloading rule: the secant law, path independent.
+/// With it (load paths that unload), Ilyushin's unloading theorem: once the depth falls below
+/// the deepest point reached so far, the whole body unloads elastically from the state at that
+/// peak, sigma = sigma(eps*) + D (eps - eps*) with eps* the strain at the peak; reloading stays on
+/// that elastic branch until the peak depth is regained, where the state is the peak state again
+/// (the elastic branch is reversible), and the deformation law resumes, continuously.
+/// Limits: the deformation law itself ignores local unloading inside the body while the punch
+/// goes deeper, and the unloading branch is linear elastic (no reverse yielding, no Bauschinger
+/// effect).  J2 flow theory has neither limitation.
+class IlyushinPointLaw : public PointLaw {
+public:
+  IlyushinPointLaw(const IlyushinLaw& law, bool unloading_rule, std::size_t points);
+  bool elastic(std::size_t point, const VoigtVector& strain) const override;
+  PointResponse respond(std::size_t point, const VoigtVector& strain) const override;
+  void commit(std::size_t point, const VoigtVector& strain) override;
+  bool has_yielded(std::size_t point) const override { return peak_intensity_[point] > law_.elastic_limit(); }
+  void set_loading(bool beyond_previous_peak) override { loading_ = !unloading_rule_ || beyond_previous_peak; }
+  const IlyushinLaw& law() const { return law_; }
+
+private:
+  IlyushinLaw law_;
+  bool unloading_rule_;
+  bool loading_ = true;
+  PlaneStrainMatrix elastic_;
+  std::vector<VoigtVector, Eigen::aligned_allocator<VoigtVector>> peak_strain_;  // eps* per point
+  std::vector<double> peak_intensity_;                                           // e_u(eps*) per point
+};
+
+/// J2 flow theory with the hardening curve of an Ilyushin law; plastic strain and equivalent
+/// plastic strain are the carried state.
+class J2PointLaw : public PointLaw {
+public:
+  J2PointLaw(const J2Law& law, std::size_t points);
+  bool elastic(std::size_t point, const VoigtVector& strain) const override;
+  PointResponse respond(std::size_t point, const VoigtVector& strain) const override;
+  void commit(std::size_t point, const VoigtVector& strain) override;
+  bool has_yielded(std::size_t point) const override { return state_[point].equivalent_plastic_strain > 0.0; }
+
+private:
+  J2Law law_;
+  double initial_yield_ = 0.0;
+  std::vector<J2State, Eigen::aligned_allocator<J2State>> state_;
+};
+
+class InelasticBulk : public BulkModel {
+public:
+  InelasticBulk(const ElasticStiffness& elastic, std::unique_ptr<PointLaw> law);
 
   void internal_force(const double* u, double* f) override;
   void tangent(const double* u, double* values) override;
   void commit(const double* u) override;
   long plastic_points() const override { return plastic_points_; }
   double max_strain_intensity() const override { return max_strain_intensity_; }
-  /// Secant element matrix at the committed state: f_e = K_e u_e exactly (sigma = D_secant eps).
-  ElementMatrix element_matrix(int ei, int ej) const override;
   std::array<GaussPointState, 4> gauss_point_states(int ei, int ej) const override;
+  ElementVector element_force(int ei, int ej) const override;
 
-  const IlyushinLaw& law() const { return law_; }
-  /// Strain intensity at each Gauss point of the committed state (element-major, 4 per element).
-  const std::vector<double>& committed_strain_intensity() const { return strain_intensity_; }
-  /// Elements with at least one yielded Gauss point at the committed state.
-  const std::vector<int>& yielded_elements() const { return yielded_; }
+  const PointLaw& law() const { return *law_; }
+  void set_loading(bool beyond_previous_peak) { law_->set_loading(beyond_previous_peak); }
 
 private:
-  /// True if any Gauss point of the element is beyond the elastic limit at u.
-  bool yields(int ei, int ej, const double* u, std::array<VoigtVector, 4>& strains) const;
+  /// True if any Gauss point of the element is inelastic at u (strains returned).
+  bool inelastic(int ei, int ej, const double* u, std::array<VoigtVector, 4>& strains) const;
+  ElementVector element_force(int ei, int ej, const std::array<VoigtVector, 4>& strains) const;
 
   const ElasticStiffness& elastic_;
   const Mesh& mesh_;
   const StiffnessPattern& pattern_;
-  IlyushinLaw law_;
+  std::unique_ptr<PointLaw> law_;
   std::vector<double> committed_u_;
-  std::vector<double> strain_intensity_;
-  std::vector<int> yielded_;
   long plastic_points_ = 0;
   double max_strain_intensity_ = 0.0;
 };

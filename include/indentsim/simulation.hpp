@@ -28,10 +28,9 @@ public:
   const MeshPlan& plan() const { return plan_; }
   const Mesh& mesh() const { return *mesh_; }
   const ContactBoundary& contact_boundary() const { return *contact_; }
-  const ElementMatrixSource& element_matrices() const { return *bulk_; }
   const BulkModel& bulk() const { return *bulk_; }
-  /// The plastic model, or nullptr for an elastic load case (which never enters plasticity code).
-  const IlyushinBulk* plasticity() const { return plastic_.get(); }
+  /// The inelastic model, or nullptr for an elastic load case (which never enters plasticity code).
+  const InelasticBulk* plasticity() const { return plastic_.get(); }
   /// Newton report of the last attempt (for diagnostics and tests).
   const NewtonReport& last_newton_report() const { return last_report_; }
 
@@ -47,6 +46,9 @@ public:
   const std::vector<double>& displacement() const { return u_; }
   ContactResult contact() const;
   double contact_half_width() const;
+  /// The depth at which the punch would first touch the current surface, max_k (-v_k - g(x_k)):
+  /// after separation, the residual depth of the imprint where the punch left it.
+  double free_surface_depth() const;
   std::vector<LayerForce> layer_forces() const;
   long symbolic_analyses() const { return newton_->total_symbolic_analyses(); }
   /// Warnings raised so far (each once), e.g. a contact zone that left the fine zone.
@@ -63,13 +65,14 @@ private:
   std::unique_ptr<Mesh> mesh_;
   std::unique_ptr<StiffnessPattern> pattern_;
   std::unique_ptr<ElasticStiffness> stiffness_;
-  std::unique_ptr<IlyushinBulk> plastic_;
+  std::unique_ptr<InelasticBulk> plastic_;
   BulkModel* bulk_ = nullptr;  // stiffness_ or plastic_
   std::unique_ptr<ContactBoundary> contact_;
   std::unique_ptr<ContactEquations> equations_;
   std::unique_ptr<NewtonSolver> newton_;
 
   double alpha_ = 0.0, alpha_previous_ = 0.0;
+  double deepest_ = 0.0;  ///< the largest converged depth so far (the load path's peak)
   std::vector<double> u_, u_previous_, guess_;
   bool has_previous_ = false;
   int rows_ = 0;

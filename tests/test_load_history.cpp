@@ -1,0 +1,120 @@
+// Load histories: unloading, separation, reloading, for the elastic model, Ilyushin's
+// deformation theory with its unloading rule, and J2 flow theory.
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include <gtest/gtest.h>
+
+#include "indentsim/error.hpp"
+#include "indentsim/io.hpp"
+#include "indentsim/simulation.hpp"
+#include "test_support.hpp"
+
+using namespace indentsim;
+using indentsim::testing::shipped_case;
+
+namespace {
+
+struct History {
+  std::vector<IncrementRecord> curve;
+  LoadHistorySummary summary;
+  double most_tensile_contact_force = 0.0;  // the most negative nodal contact force seen
+};
+
+History run_history(const std::string& model, const std::string& path, const std::string& increments) {
+  Simulation sim(shipped_case("deep_plastic.toml", {"material.model=" + model, "load.path=" + path,
+                                                     "load.increments=" + increments, "mesh.contact_nodes=8"}));
+  History h;
+  sim.run([&](const IncrementRecord& r) {
+    h.curve.push_back(r);
+    h.summary.add(r, sim.free_surface_depth());
+    for (double f : sim.contact().nodal_force) h.most_tensile_contact_force = std::min(h.most_tensile_contact_force, f);
+  });
+  return h;
+}
+
+const IncrementRecord& at_step(const History& h, int step) { return h.curve.at(static_cast<std::size_t>(step)); }
+
+}  // namespace
+
+TEST(LoadHistory, PerSegmentIncrementsArePlannedPerSegment) {
+  const LoadCase lc = shipped_case("load_unload.toml");
+  ASSERT_EQ(lc.load.segment_increments, (std::vector<int>{10, 10, 12}));
+  const auto alphas = plan_increments(lc.load);
+  ASSERT_EQ(alphas.size(), 33u);
+  EXPECT_EQ(alphas[10], 5e-5);
+  EXPECT_EQ(alphas[20], 0.0);
+  EXPECT_EQ(alphas[32], 6e-5);
+  EXPECT_THROW(shipped_case("load_unload.toml", {"load.increments=[10, 10]"}), InputError);
+}
+
+TEST(LoadHistory, ElasticUnloadingRetracesLoading) {
+  const History h = run_history("elastic", "[0, 5e-5, 0]", "[6, 6]");
+  for (int k = 0; k <= 6; ++k) {
+    const IncrementRecord& up = at_step(h, k);
+    const IncrementRecord& down = at_step(h, 12 - k);
+    ASSERT_DOUBLE_EQ(up.alpha, down.alpha);
+    EXPECT_NEAR(down.force, up.force, 1e-9 * at_step(h, 6).force) << "alpha " << up.alpha;
+    // At alpha = 0 the punch touches the axis node with zero force: counting it is a tie.
+    if (k > 0) {
+      EXPECT_EQ(down.contact_nodes, up.contact_nodes);
+    }
+  }
+  ASSERT_EQ(h.summary.unloadings().size(), 1u);
+  // No plasticity, no imprint: the punch leaves at alpha = 0.
+  EXPECT_NEAR(h.summary.unloadings()[0].residual_depth, 0.0, 1e-9 * 5e-5);
+}
+
+class PlasticHistory : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(PlasticHistory, UnloadingLeavesAnImprintAndIsSteeperThanLoading) {
+  const History h = run_history(GetParam(), "[0, 5e-5, 0]", "[8, 8]");
+  ASSERT_EQ(h.summary.unloadings().size(), 1u);
+  const auto& u = h.summary.unloadings()[0];
+  EXPECT_TRUE(u.separated);
+  EXPECT_GT(u.residual_depth, 0.1 * u.depth);  // a real imprint, not round-off
+  EXPECT_LT(u.residual_depth, u.depth);
+  EXPECT_GT(u.stiffness, u.loading_stiffness);
+  // Separation: no force, every contact node released, and never a tensile contact force.
+  const IncrementRecord& last = h.curve.back();
+  EXPECT_EQ(last.force, 0.0);
+  EXPECT_EQ(last.contact_nodes, 0);
+  EXPECT_GE(h.most_tensile_contact_force, -1e-9 * u.force);
+}
+
+TEST_P(PlasticHistory, ReloadingToThePeakGivesThePeakForce) {
+  const History h = run_history(GetParam(), "[0, 5e-5, 1e-5, 5e-5]", "[8, 6, 6]");
+  const IncrementRecord& peak = at_step(h, 8);
+  const IncrementRecord& again = h.curve.back();
+  ASSERT_DOUBLE_EQ(peak.alpha, again.alpha);
+  EXPECT_NEAR(again.force, peak.force, 0.01 * peak.force);
+}
+
+TEST_P(PlasticHistory, UnloadingToSeparationAndBackIntoContact) {
+  const History h = run_history(GetParam(), "[0, 5e-5, 0, 5e-5]", "[6, 6, 6]");
+  int separated = 0;
+  for (const auto& r : h.curve)
+    if (r.step > 6 && r.force == 0.0) {
+      EXPECT_EQ(r.contact_nodes, 0) << "step " << r.step;
+      ++separated;
+    }
+  EXPECT_GT(separated, 0);
+  EXPECT_GT(h.curve.back().force, 0.0);
+  EXPECT_GE(h.most_tensile_contact_force, -1e-9 * h.summary.peak_force());
+}
+
+INSTANTIATE_TEST_SUITE_P(Models, PlasticHistory, ::testing::Values("ilyushin", "j2"));
+
+TEST(LoadHistory, J2AndIlyushinAgreeBeforeTheyDiverge) {
+  // On indentation the strain path under the punch is not proportional, so the two models
+  // differ; at the first yield they still agree closely (documented in the README).
+  const History ilyushin = run_history("ilyushin", "[0, 5e-5]", "5");
+  const History j2 = run_history("j2", "[0, 5e-5]", "5");
+  const double first = std::abs(j2.curve[1].force - ilyushin.curve[1].force) / ilyushin.curve[1].force;
+  const double last = std::abs(j2.curve.back().force - ilyushin.curve.back().force) / ilyushin.curve.back().force;
+  RecordProperty("relative_difference_first_last", fmt::format("{:.4f} {:.4f}", first, last));
+  EXPECT_LT(first, 0.02);
+  EXPECT_LT(last, 0.08);
+  EXPECT_GT(j2.curve.back().force, ilyushin.curve.back().force);  // flow theory is stiffer
+}
