@@ -8,6 +8,7 @@ packages=(
   libsundials-dev libsuitesparse-dev libeigen3-dev libfmt-dev
   libgtest-dev libtomlplusplus-dev libcli11-dev
   python3 python3-matplotlib
+  clang libclang-rt-14-dev   # libFuzzer targets (scripts/fuzz.sh)
 )
 
 missing=()

@@ -133,6 +133,11 @@ void ElasticStiffness::commit(const double* u) {
   max_strain_intensity_ = largest;
 }
 
+void ElasticStiffness::restore(const std::vector<double>& history, const double* u) {
+  if (!history.empty()) throw std::invalid_argument("an elastic model carries no history");
+  commit(u);  // elasticity has no history: committing u rebuilds everything
+}
+
 std::array<GaussPointState, 4> ElasticStiffness::gauss_point_states(int ei, int ej) const {
   std::array<GaussPointState, 4> states;
   if (committed_u_.empty()) return states;

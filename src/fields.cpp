@@ -188,6 +188,15 @@ void FieldSeries::add(int step, double alpha, const std::string& vtu_text) {
   const std::string name = fmt::format("fields/step_{:06d}.vtu", step);
   write_file_atomically(dir_ / name, vtu_text);
   entries_.emplace_back(alpha, name);
+  write_pvd();
+}
+
+void FieldSeries::add_existing(int, double alpha, const std::string& relative_file) {
+  entries_.emplace_back(alpha, relative_file);
+  write_pvd();
+}
+
+void FieldSeries::write_pvd() {
   std::string pvd = "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n";
   for (const auto& [time, file] : entries_)
     pvd += fmt::format("    <DataSet timestep=\"{:.17g}\" part=\"0\" file=\"{}\"/>\n", time, file);

@@ -88,7 +88,8 @@ std::string LoadHistorySummary::json(const std::string& model) const {
   return out;
 }
 
-RunOutput::RunOutput(const std::filesystem::path& dir, const LoadCase& load_case)
+RunOutput::RunOutput(const std::filesystem::path& dir, const LoadCase& load_case,
+                     const std::vector<IncrementRecord>& replay_curve, const std::vector<double>& replay_depths)
     : dir_(dir),
       model_(to_string(load_case.material.model)),
       fields_every_(load_case.output.fields_every),
@@ -96,11 +97,28 @@ RunOutput::RunOutput(const std::filesystem::path& dir, const LoadCase& load_case
       curve_(dir / "curve.csv"),
       fields_(dir) {
   write_file_atomically(dir_ / "case.toml", to_toml(load_case));
+  for (std::size_t k = 0; k < replay_curve.size(); ++k) {
+    const IncrementRecord& r = replay_curve[k];
+    curve_.write(r);
+    summary_.add(r, replay_depths[k]);
+    records_.push_back(r);
+    depths_.push_back(replay_depths[k]);
+    last_step_ = r.step;
+    // Fields written before the interruption stay in the series.
+    const std::string vtu = fmt::format("fields/step_{:06d}.vtu", r.step);
+    if (std::filesystem::exists(dir_ / vtu)) {
+      fields_.add_existing(r.step, r.alpha, vtu);
+      last_fields_step_ = r.step;
+    }
+  }
 }
 
 void RunOutput::increment(const Simulation& sim, const IncrementRecord& record) {
   curve_.write(record);
-  summary_.add(record, sim.free_surface_depth());
+  const double depth = sim.free_surface_depth();
+  summary_.add(record, depth);
+  records_.push_back(record);
+  depths_.push_back(depth);
   last_step_ = record.step;
   if (fields_every_ > 0 && record.step % fields_every_ == 0) write_fields(sim, record.step);
 }

@@ -63,7 +63,9 @@ const std::vector<SectionSpec>& schema() {
        false,
        {{"contact_nodes", false}, {"contact_half_width", false}, {"fine_width", false},
         {"fine_depth", false}, {"growth", false}}},
-      {"output", false, {{"dir", false}, {"fields_every", false}, {"profile_depths", false}}},
+      {"output",
+       false,
+       {{"dir", false}, {"fields_every", false}, {"profile_depths", false}, {"checkpoint_every", false}}},
       {"solver", false, {{"tolerance", false}, {"max_newton", false}, {"max_cutbacks", false}}},
   };
   return sections;
@@ -280,6 +282,7 @@ LoadCase from_table(const toml::table& root, const std::string& source) {
   r.read_string("output", "dir", lc.output.dir);
   r.read_integer("output", "fields_every", lc.output.fields_every);
   r.read_number_array("output", "profile_depths", lc.output.profile_depths);
+  r.read_integer("output", "checkpoint_every", lc.output.checkpoint_every);
 
   r.read_number("solver", "tolerance", lc.solver.tolerance);
   r.read_integer("solver", "max_newton", lc.solver.max_newton);
@@ -353,6 +356,8 @@ void validate(const LoadCase& lc) {
     fail("mesh.growth", fmt::format("must lie in [1, 2] (got {})", *lc.mesh.growth));
 
   if (lc.output.dir.empty()) fail("output.dir", "must not be empty");
+  if (lc.output.checkpoint_every < 0)
+    fail("output.checkpoint_every", fmt::format("must be >= 0 (got {})", lc.output.checkpoint_every));
   if (lc.output.fields_every < 0) fail("output.fields_every", fmt::format("must be >= 0 (got {})", lc.output.fields_every));
   for (std::size_t i = 0; i < lc.output.profile_depths.size(); ++i) {
     const double d = lc.output.profile_depths[i];
@@ -397,8 +402,9 @@ std::string to_toml(const LoadCase& lc) {
   toml::table dir_table{{"dir", lc.output.dir}};
   std::ostringstream dir_line;
   dir_line << dir_table;
-  t += fmt::format("\n[output]\n{}\nfields_every = {}\nprofile_depths = {}\n\n", dir_line.str(), lc.output.fields_every,
-                   numbers(lc.output.profile_depths));
+  t += fmt::format("\n[output]\n{}\nfields_every = {}\nprofile_depths = {}\ncheckpoint_every = {}\n\n",
+                   dir_line.str(), lc.output.fields_every, numbers(lc.output.profile_depths),
+                   lc.output.checkpoint_every);
   t += fmt::format("[solver]\ntolerance = {:.17g}\nmax_newton = {}\nmax_cutbacks = {}\n", lc.solver.tolerance,
                    lc.solver.max_newton, lc.solver.max_cutbacks);
   return t;

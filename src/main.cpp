@@ -1,7 +1,10 @@
-// indentsim: the command line.  Thin glue over the library: read a load case, run it, write
-// the outputs.  Exit status: 0 success, 2 bad input (nothing written), 3 the solver could not
-// converge (converged increments are kept), 1 anything else.
+// indentsim: the command line.  Thin glue over the library: read a load case (or a checkpoint),
+// run it, write the outputs.  Exit status: 0 success, 2 bad input (nothing written), 3 the solver
+// could not converge (converged increments are kept), 128 + signal when stopped by SIGINT or
+// SIGTERM (after checkpointing), 1 anything else.
+#include <algorithm>
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <unistd.h>
 #include <filesystem>
@@ -12,6 +15,7 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include "indentsim/checkpoint.hpp"
 #include "indentsim/error.hpp"
 #include "indentsim/io.hpp"
 #include "indentsim/load_case.hpp"
@@ -104,15 +108,20 @@ int command_check(const std::string& file, const std::vector<std::string>& overr
   return 0;
 }
 
-int command_run(const std::string& file, const std::vector<std::string>& overrides, const std::string& out,
-                bool quiet) {
-  std::vector<std::string> all = overrides;
-  if (!out.empty()) all.push_back("output.dir=" + toml_string(out));
-  LoadCase lc = read_load_case(file, all);
-  Simulation sim(lc);  // validates the mesh size before anything is written
-  if (!quiet) print_mesh(sim);
-  const fs::path dir = prepare_output_dir(lc);
-  RunOutput output(dir, lc);
+volatile std::sig_atomic_t stop_signal = 0;
+extern "C" void on_stop_signal(int signal) { stop_signal = signal; }
+
+struct Interrupted {
+  int signal;
+};
+
+/// Steps the simulation to the end of its load path, writing outputs and checkpoints; on
+/// SIGINT/SIGTERM it checkpoints after the increment in progress and stops cleanly.
+int drive(Simulation& sim, RunOutput& output, const std::string& label, bool quiet) {
+  const LoadCase& lc = sim.load_case();
+  const fs::path checkpoint_dir = fs::path(lc.output.dir) / "checkpoints";
+  std::signal(SIGINT, on_stop_signal);
+  std::signal(SIGTERM, on_stop_signal);
   Progress progress(static_cast<int>(plan_increments(lc.load).size()) - 1, quiet);
   std::size_t warnings_shown = 0;
   const auto show_warnings = [&] {
@@ -121,23 +130,76 @@ int command_run(const std::string& file, const std::vector<std::string>& overrid
       fmt::print(stderr, "warning: {}\n", sim.warnings()[warnings_shown]);
     }
   };
+  const auto checkpoint = [&] {
+    return save_checkpoint(checkpoint_dir, make_checkpoint(sim, output.records(), output.free_surface_depths()));
+  };
   int exit_code = 0;
+  int since_checkpoint = 0;
   try {
     sim.run([&](const IncrementRecord& r) {
       output.increment(sim, r);
+      inject_fault("increment");
       show_warnings();
       progress.update(r);
+      if (lc.output.checkpoint_every > 0 && ++since_checkpoint >= lc.output.checkpoint_every) {
+        checkpoint();
+        since_checkpoint = 0;
+      }
+      if (stop_signal) throw Interrupted{stop_signal};
     });
+    if (lc.output.checkpoint_every > 0 && since_checkpoint > 0) checkpoint();
   } catch (const SolverError& e) {
     progress.clear_line();
-    fmt::print(stderr, "{}: {}\n", file, e.what());
+    fmt::print(stderr, "{}: {}\n", label, e.what());
     exit_code = exit_not_converged;
+  } catch (const Interrupted& i) {
+    progress.clear_line();
+    const fs::path file = checkpoint();
+    fmt::print(stderr, "{}: stopped by signal {} after increment {}; resume with: indentsim resume {}\n", label,
+               i.signal, output.records().back().step, file.string());
+    exit_code = 128 + i.signal;
   }
   progress.finish();
   output.finish(sim);
   show_warnings();
   if (!quiet) fmt::print("P-alpha curve: {}\n", output.curve_path().string());
   return exit_code;
+}
+
+int command_run(const std::string& file, const std::vector<std::string>& overrides, const std::string& out,
+                bool quiet) {
+  std::vector<std::string> all = overrides;
+  if (!out.empty()) all.push_back("output.dir=" + toml_string(out));
+  LoadCase lc = read_load_case(file, all);
+  Simulation sim(lc);  // validates the mesh size before anything is written
+  if (!quiet) print_mesh(sim);
+  RunOutput output(prepare_output_dir(lc), lc);
+  return drive(sim, output, file, quiet);
+}
+
+/// A checkpoint file, or a folder of them (the newest is taken).
+fs::path find_checkpoint(const std::string& argument) {
+  std::error_code ec;
+  if (!fs::is_directory(argument, ec)) return argument;
+  std::vector<fs::path> found;
+  for (const auto& entry : fs::directory_iterator(argument, ec))
+    if (entry.path().extension() == ".ck") found.push_back(entry.path());
+  if (found.empty()) throw InputError(argument, "checkpoint", "is a folder without checkpoint_*.ck files");
+  return *std::max_element(found.begin(), found.end());
+}
+
+int command_resume(const std::string& argument, const std::vector<std::string>& overrides, const std::string& out,
+                   bool quiet) {
+  const fs::path file = find_checkpoint(argument);
+  const Checkpoint checkpoint = read_checkpoint(file);
+  std::vector<std::string> all = overrides;
+  if (!out.empty()) all.push_back("output.dir=" + toml_string(out));
+  ResumedRun run = resume_from(checkpoint, file.string(), all);  // everything checked before writing
+  if (!quiet)
+    fmt::print("resuming {} after increment {} (alpha = {:.6g} m)\n", file.string(), checkpoint.curve.back().step,
+               checkpoint.state.alpha);
+  RunOutput output(prepare_output_dir(run.load_case), run.load_case, checkpoint.curve, checkpoint.free_surface_depths);
+  return drive(*run.simulation, output, file.string(), quiet);
 }
 
 }  // namespace
@@ -156,6 +218,12 @@ int main(int argc, char** argv) {
   run->add_option("--set", overrides, "override a key: section.key=value")->take_all();
   run->add_flag("--quiet,-q", quiet, "print nothing but warnings and errors (no progress line)");
 
+  CLI::App* resume = app.add_subcommand("resume", "continue a run from a checkpoint (file, or folder: the newest)");
+  resume->add_option("checkpoint", file, "checkpoint file or folder")->required();
+  resume->add_option("--out", out, "output folder (default: the run's own)");
+  resume->add_option("--set", overrides, "override a key, e.g. load.path=... to branch")->take_all();
+  resume->add_flag("--quiet,-q", quiet, "print nothing but warnings and errors (no progress line)");
+
   CLI::App* check = app.add_subcommand("check", "validate a load case without solving");
   check->add_option("case", file, "load case (TOML)")->required();
   check->add_option("--set", overrides, "override a key: section.key=value")->take_all();
@@ -171,6 +239,7 @@ int main(int argc, char** argv) {
 
   try {
     if (run->parsed()) return command_run(file, overrides, out, quiet);
+    if (resume->parsed()) return command_resume(file, overrides, out, quiet);
     return command_check(file, overrides);
   } catch (const InputError& e) {
     fmt::print(stderr, "error: {}\n", e.what());

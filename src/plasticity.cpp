@@ -1,6 +1,7 @@
 #include "indentsim/plasticity.hpp"
 
 #include <algorithm>
+#include <stdexcept>
 
 namespace indentsim {
 
@@ -45,6 +46,26 @@ void IlyushinPointLaw::commit(std::size_t point, const VoigtVector& strain) {
   peak_intensity_[point] = strain_intensity(strain);
 }
 
+std::vector<double> IlyushinPointLaw::history() const {
+  std::vector<double> h;
+  h.reserve(1 + 4 * peak_intensity_.size());
+  h.push_back(loading_ ? 1.0 : 0.0);
+  for (std::size_t p = 0; p < peak_intensity_.size(); ++p) {
+    h.insert(h.end(), {peak_strain_[p][0], peak_strain_[p][1], peak_strain_[p][2], peak_intensity_[p]});
+  }
+  return h;
+}
+
+void IlyushinPointLaw::restore(const std::vector<double>& h) {
+  if (h.size() != 1 + 4 * peak_intensity_.size())
+    throw std::invalid_argument("Ilyushin history of the wrong size for this mesh");
+  loading_ = h[0] != 0.0;
+  for (std::size_t p = 0; p < peak_intensity_.size(); ++p) {
+    peak_strain_[p] = VoigtVector(h[1 + 4 * p], h[2 + 4 * p], h[3 + 4 * p]);
+    peak_intensity_[p] = h[4 + 4 * p];
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 J2PointLaw::J2PointLaw(const J2Law& law, std::size_t points)
     : law_(law), initial_yield_(law.yield_stress(0.0)), state_(points) {}
@@ -73,6 +94,24 @@ PointResponse J2PointLaw::respond(std::size_t point, const VoigtVector& strain) 
 
 void J2PointLaw::commit(std::size_t point, const VoigtVector& strain) {
   state_[point] = law_.respond(strain, state_[point]).state;
+}
+
+std::vector<double> J2PointLaw::history() const {
+  std::vector<double> h;
+  h.reserve(5 * state_.size());
+  for (const J2State& s : state_) {
+    h.insert(h.end(), {s.plastic_strain[0], s.plastic_strain[1], s.plastic_strain[2], s.plastic_strain[3],
+                       s.equivalent_plastic_strain});
+  }
+  return h;
+}
+
+void J2PointLaw::restore(const std::vector<double>& h) {
+  if (h.size() != 5 * state_.size()) throw std::invalid_argument("J2 history of the wrong size for this mesh");
+  for (std::size_t p = 0; p < state_.size(); ++p) {
+    state_[p].plastic_strain = Eigen::Vector4d(h[5 * p], h[5 * p + 1], h[5 * p + 2], h[5 * p + 3]);
+    state_[p].equivalent_plastic_strain = h[5 * p + 4];
+  }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -151,6 +190,21 @@ void InelasticBulk::commit(const double* u) {
         if (law_->has_yielded(first + g)) ++plastic_points_;
       }
     }
+}
+
+std::vector<double> InelasticBulk::history() const {
+  std::vector<double> h{static_cast<double>(plastic_points_), max_strain_intensity_};
+  const std::vector<double> law = law_->history();
+  h.insert(h.end(), law.begin(), law.end());
+  return h;
+}
+
+void InelasticBulk::restore(const std::vector<double>& h, const double* u) {
+  if (h.size() < 2) throw std::invalid_argument("inelastic history too short");
+  plastic_points_ = static_cast<long>(h[0]);
+  max_strain_intensity_ = h[1];
+  law_->restore(std::vector<double>(h.begin() + 2, h.end()));
+  std::copy(u, u + committed_u_.size(), committed_u_.begin());
 }
 
 std::array<GaussPointState, 4> InelasticBulk::gauss_point_states(int ei, int ej) const {

@@ -48,7 +48,8 @@ bool unloads(const std::vector<double>& path) {
 
 }  // namespace
 
-Simulation::Simulation(LoadCase load_case) : load_case_(std::move(load_case)) {
+Simulation::Simulation(LoadCase load_case, std::optional<double> planned_contact_half_width)
+    : load_case_(std::move(load_case)) {
   const auto& m = load_case_.material;
   const ElasticMaterial material{m.E, m.nu};
   std::optional<IlyushinLaw> law;
@@ -59,7 +60,8 @@ Simulation::Simulation(LoadCase load_case) : load_case_(std::move(load_case)) {
                        *violation);
   }
   plan_ = plan_mesh(load_case_);  // also refuses a mesh too large before any work
-  if (law && !load_case_.mesh.contact_half_width) plan_ = plan_mesh(load_case_, pilot_contact_half_width(load_case_));
+  if (planned_contact_half_width) plan_ = plan_mesh(load_case_, planned_contact_half_width);
+  else if (law && !load_case_.mesh.contact_half_width) plan_ = plan_mesh(load_case_, pilot_contact_half_width(load_case_));
   mesh_ = std::make_unique<Mesh>(Mesh::from_plan(load_case_, plan_));
   pattern_ = std::make_unique<StiffnessPattern>(*mesh_);
   stiffness_ = std::make_unique<ElasticStiffness>(*mesh_, material, *pattern_);
@@ -90,8 +92,9 @@ Simulation::~Simulation() = default;
 
 void Simulation::run(const std::function<void(const IncrementRecord&)>& on_increment) {
   const std::vector<double> targets = plan_increments(load_case_.load);
-  for (double target : targets) {
-    const IncrementRecord r = advance_to(target);
+  while (next_target_ < targets.size()) {
+    const IncrementRecord r = advance_to(targets[next_target_]);
+    ++next_target_;  // before reporting: a checkpoint taken now continues with the next depth
     if (on_increment) on_increment(r);
   }
   const ContactResult final_contact = contact();
@@ -178,6 +181,42 @@ ContactResult Simulation::contact() const {
 
 double Simulation::contact_half_width() const {
   return indentsim::contact_half_width(*contact_, contact());
+}
+
+SimulationState Simulation::state() const {
+  SimulationState s;
+  s.alpha = alpha_;
+  s.alpha_previous = alpha_previous_;
+  s.deepest = deepest_;
+  s.has_previous = has_previous_;
+  s.rows = rows_;
+  s.next_target = next_target_;
+  s.warned_fine_zone = warned_fine_zone_;
+  s.warnings = warnings_;
+  s.u = u_;
+  s.u_previous = u_previous_;
+  s.history = bulk_->history();
+  s.in_contact = contact().in_contact;
+  return s;
+}
+
+void Simulation::restore(const SimulationState& s) {
+  const std::size_t n = static_cast<std::size_t>(mesh_->equations());
+  if (s.u.size() != n || (s.has_previous && s.u_previous.size() != n))
+    throw std::invalid_argument("the saved displacement does not fit this mesh");
+  alpha_ = s.alpha;
+  alpha_previous_ = s.alpha_previous;
+  deepest_ = s.deepest;
+  has_previous_ = s.has_previous;
+  rows_ = s.rows;
+  next_target_ = s.next_target;
+  warned_fine_zone_ = s.warned_fine_zone;
+  warnings_ = s.warnings;
+  u_ = s.u;
+  u_previous_ = s.u_previous;
+  bulk_->restore(s.history, u_.data());
+  if (contact().in_contact != s.in_contact)
+    throw std::invalid_argument("the saved contact set does not follow from the saved displacement");
 }
 
 double Simulation::free_surface_depth() const {

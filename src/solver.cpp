@@ -57,6 +57,7 @@ struct KluWithReuse {
   sundials::LinearSolver klu;
   long numeric_factorizations = 0;
   long symbolic_analyses = 0;
+  bool fresh_numeric = false;  // the next setup factors afresh (new pivots), keeping the analysis
 
   static KluWithReuse* self(SUNLinearSolver s) { return static_cast<KluWithReuse*>(s->content); }
   static SUNLinearSolverContent_KLU klu_content(SUNLinearSolver klu) {
@@ -65,24 +66,40 @@ struct KluWithReuse {
 
   static SUNLinearSolver_Type type(SUNLinearSolver) { return SUNLINEARSOLVER_DIRECT; }
   static SUNLinearSolver_ID id(SUNLinearSolver) { return SUNLINEARSOLVER_KLU; }
+  // Called by KINSOL at the start of every KINSol call (every increment).  The symbolic analysis
+  // is kept; the first factorization of the increment is a full numeric one with fresh pivoting,
+  // later ones refactor with its pivots.  So an increment's arithmetic depends only on its own
+  // matrices, not on what the previous increment left in KLU: a run resumed from a checkpoint
+  // repeats an uninterrupted run bit for bit.
   static int initialize(SUNLinearSolver s) {
     KluWithReuse* me = self(s);
     if (me->symbolic_analyses == 0) return SUNLinSolInitialize_KLU(me->klu.get());
+    me->fresh_numeric = true;
     return SUNLS_SUCCESS;
   }
   static int setup(SUNLinearSolver s, SUNMatrix a) {
     KluWithReuse* me = self(s);
     SUNLinearSolver klu = me->klu.get();
-    const bool analyse = klu_content(klu)->first_factorize != 0;
+    SUNLinearSolverContent_KLU content = klu_content(klu);
+    ++me->numeric_factorizations;
+    if (me->fresh_numeric && content->symbolic) {
+      me->fresh_numeric = false;
+      if (content->numeric) sun_klu_free_numeric(&content->numeric, &content->common);
+      content->numeric = sun_klu_factor(SUNSparseMatrix_IndexPointers(a), SUNSparseMatrix_IndexValues(a),
+                                        SUNSparseMatrix_Data(a), content->symbolic, &content->common);
+      content->last_flag = content->numeric ? SUNLS_SUCCESS : SUNLS_PACKAGE_FAIL_REC;
+      return content->last_flag;
+    }
+    const bool analyse = content->first_factorize != 0;
     int flag = SUNLinSolSetup_KLU(klu, a);
     if (flag != SUNLS_SUCCESS && !analyse) {
-      klu_content(klu)->first_factorize = 1;
+      // A refactorization failed (a pivot that was fine became zero): analyse and factor afresh.
+      content->first_factorize = 1;
       flag = SUNLinSolSetup_KLU(klu, a);
       ++me->symbolic_analyses;
     } else if (analyse) {
       ++me->symbolic_analyses;
     }
-    ++me->numeric_factorizations;
     return flag;
   }
   static int solve(SUNLinearSolver s, SUNMatrix a, N_Vector x, N_Vector b, realtype tol) {

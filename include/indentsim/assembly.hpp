@@ -73,6 +73,10 @@ public:
   /// elastic and secant laws it is K_e u_e with the current (secant) local stiffness matrix: the
   /// rows the paper's layer forces are made of.
   virtual ElementVector element_force(int ei, int ej) const = 0;
+  /// The carried material history (everything commit() accumulated), flattened, and its
+  /// restoration; after restore(history, u) the model is as it was after commit(u).
+  virtual std::vector<double> history() const = 0;
+  virtual void restore(const std::vector<double>& history, const double* u) = 0;
 };
 
 /// Linear elasticity on the mesh: one closed-form matrix per pair of element size classes
@@ -82,6 +86,8 @@ public:
   ElasticStiffness(const Mesh& mesh, const ElasticMaterial& material, const StiffnessPattern& pattern);
 
   ElementVector element_force(int ei, int ej) const override;
+  std::vector<double> history() const override { return {}; }
+  void restore(const std::vector<double>& history, const double* u) override;
   void internal_force(const double* u, double* f) override { pattern_.multiply(values_, u, f); }
   void tangent(const double*, double* values) override { std::copy(values_.begin(), values_.end(), values); }
   void commit(const double* u) override;

@@ -43,9 +43,12 @@ class FieldSeries {
 public:
   explicit FieldSeries(std::filesystem::path dir);
   void add(int step, double alpha, const std::string& vtu_text);
+  /// Lists a VTU already on disk (a resumed run keeps the fields written before).
+  void add_existing(int step, double alpha, const std::string& relative_file);
   const std::filesystem::path& pvd_path() const { return pvd_; }
 
 private:
+  void write_pvd();
   std::filesystem::path dir_, pvd_;
   std::vector<std::pair<double, std::string>> entries_;
 };

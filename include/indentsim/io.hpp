@@ -67,10 +67,14 @@ private:
 ///   summary.json   peak, unloading stiffness and residual depth of each unloading branch.
 class RunOutput {
 public:
-  RunOutput(const std::filesystem::path& dir, const LoadCase& load_case);
+  /// `replay_curve`/`replay_depths`: the rows of a run being resumed, written again first.
+  RunOutput(const std::filesystem::path& dir, const LoadCase& load_case,
+            const std::vector<IncrementRecord>& replay_curve = {}, const std::vector<double>& replay_depths = {});
   void increment(const Simulation& sim, const IncrementRecord& record);
   void finish(const Simulation& sim);
   std::filesystem::path curve_path() const { return dir_ / "curve.csv"; }
+  const std::vector<IncrementRecord>& records() const { return records_; }
+  const std::vector<double>& free_surface_depths() const { return depths_; }
 
 private:
   void write_fields(const Simulation& sim, int step);
@@ -78,6 +82,8 @@ private:
   std::filesystem::path dir_;
   std::string model_;
   LoadHistorySummary summary_;
+  std::vector<IncrementRecord> records_;
+  std::vector<double> depths_;
   int fields_every_ = 0;
   std::vector<double> profile_depths_;
   CurveWriter curve_;

@@ -50,6 +50,7 @@ struct OutputInput {
   std::string dir = "out";  ///< output folder (relative to the working directory)
   int fields_every = 0;     ///< VTU every N increments (0: the final state only)
   std::vector<double> profile_depths;  ///< depths [m] of the stress profiles besides the surface
+  int checkpoint_every = 10;  ///< checkpoint every N increments and at the end (0: only on SIGINT/SIGTERM)
 };
 
 struct SolverInput {

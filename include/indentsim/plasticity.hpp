@@ -40,6 +40,9 @@ public:
   /// Whether the load path is beyond its deepest point so far (for laws whose branch follows
   /// the global load history); incremental laws ignore it.
   virtual void set_loading(bool /*beyond_previous_peak*/) {}
+  /// The carried state of every point, flattened, and its restoration (checkpoints).
+  virtual std::vector<double> history() const = 0;
+  virtual void restore(const std::vector<double>& history) = 0;
 };
 
 /// Ilyushin's deformation theory.  Without unloading rule: the secant law, path independent.
@@ -59,6 +62,8 @@ public:
   void commit(std::size_t point, const VoigtVector& strain) override;
   bool has_yielded(std::size_t point) const override { return peak_intensity_[point] > law_.elastic_limit(); }
   void set_loading(bool beyond_previous_peak) override { loading_ = !unloading_rule_ || beyond_previous_peak; }
+  std::vector<double> history() const override;
+  void restore(const std::vector<double>& history) override;
   const IlyushinLaw& law() const { return law_; }
 
 private:
@@ -79,6 +84,8 @@ public:
   PointResponse respond(std::size_t point, const VoigtVector& strain) const override;
   void commit(std::size_t point, const VoigtVector& strain) override;
   bool has_yielded(std::size_t point) const override { return state_[point].equivalent_plastic_strain > 0.0; }
+  std::vector<double> history() const override;
+  void restore(const std::vector<double>& history) override;
 
 private:
   J2Law law_;
@@ -97,6 +104,8 @@ public:
   double max_strain_intensity() const override { return max_strain_intensity_; }
   std::array<GaussPointState, 4> gauss_point_states(int ei, int ej) const override;
   ElementVector element_force(int ei, int ej) const override;
+  std::vector<double> history() const override;
+  void restore(const std::vector<double>& history, const double* u) override;
 
   const PointLaw& law() const { return *law_; }
   void set_loading(bool beyond_previous_peak) { law_->set_loading(beyond_previous_peak); }

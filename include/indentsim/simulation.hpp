@@ -2,7 +2,9 @@
 // A run, from load case to P-alpha curve: plans and builds the mesh, assembles the elastic
 // stiffness, sets up contact and the Newton solver, and steps the depth along the load path.
 // The CLI is a thin layer over this class; the tests drive it directly.
+#include <cstdint>
 #include <functional>
+#include <optional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -18,10 +20,26 @@
 
 namespace indentsim {
 
+/// Everything that changes while a run goes on: with the load case (and the mesh plan) it is all
+/// a checkpoint needs to continue the run bit for bit.
+struct SimulationState {
+  double alpha = 0.0, alpha_previous = 0.0, deepest = 0.0;
+  bool has_previous = false;
+  int rows = 0;                    ///< increments reported so far
+  std::uint64_t next_target = 0;   ///< index of the next planned depth
+  bool warned_fine_zone = false;
+  std::vector<std::string> warnings;
+  std::vector<double> u, u_previous;  ///< displacement and the previous one (the predictor's)
+  std::vector<double> history;        ///< the bulk model's carried material state
+  std::vector<char> in_contact;       ///< the active contact set at u (implied by u; kept as a check)
+};
+
 class Simulation {
 public:
   /// Throws InputError when the load case asks for a model not available or a mesh too large.
-  explicit Simulation(LoadCase load_case);
+  /// `planned_contact_half_width`, when given, sizes the mesh without a pilot run (a resumed run
+  /// rebuilds exactly the mesh of the run it continues).
+  explicit Simulation(LoadCase load_case, std::optional<double> planned_contact_half_width = std::nullopt);
   ~Simulation();
 
   const LoadCase& load_case() const { return load_case_; }
@@ -41,6 +59,12 @@ public:
 
   /// Solves one increment from the current state to depth `alpha` (with cutbacks).
   IncrementRecord advance_to(double alpha);
+
+  SimulationState state() const;
+  /// Continues from a saved state (same load case physics, same mesh); throws
+  /// std::invalid_argument when the state does not fit this mesh and model.
+  void restore(const SimulationState& state);
+  std::uint64_t next_target() const { return next_target_; }
 
   double alpha() const { return alpha_; }
   const std::vector<double>& displacement() const { return u_; }
@@ -76,6 +100,7 @@ private:
   std::vector<double> u_, u_previous_, guess_;
   bool has_previous_ = false;
   int rows_ = 0;
+  std::uint64_t next_target_ = 0;
   std::vector<std::string> warnings_;
   bool warned_fine_zone_ = false;
   NewtonReport last_report_;

@@ -1,0 +1,394 @@
+#include "indentsim/checkpoint.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <csignal>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "indentsim/error.hpp"
+
+namespace indentsim {
+
+namespace {
+
+constexpr char magic[8] = {'I', 'N', 'D', 'S', 'I', 'M', 'C', 'K'};
+constexpr std::size_t header_size = sizeof(magic) + sizeof(std::uint32_t) + sizeof(std::uint64_t);
+
+class ByteWriter {
+public:
+  template <class T>
+  void put(const T& value) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    const auto* p = reinterpret_cast<const char*>(&value);
+    bytes_.append(p, sizeof(T));
+  }
+  void put_string(const std::string& s) {
+    put<std::uint64_t>(s.size());
+    bytes_.append(s);
+  }
+  template <class T>
+  void put_vector(const std::vector<T>& v) {
+    put<std::uint64_t>(v.size());
+    if (!v.empty()) bytes_.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+  }
+  std::string& bytes() { return bytes_; }
+
+private:
+  std::string bytes_;
+};
+
+// Every read checks what is left, so a damaged file can only fail cleanly.
+class ByteReader {
+public:
+  ByteReader(const char* data, std::size_t size, const std::string& source) : p_(data), left_(size), source_(source) {}
+
+  template <class T>
+  T get(const char* what) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    need(sizeof(T), what);
+    T value;
+    std::memcpy(&value, p_, sizeof(T));
+    advance(sizeof(T));
+    return value;
+  }
+  std::string get_string(const char* what) {
+    const auto n = get<std::uint64_t>(what);
+    need_elements(n, 1, what);
+    std::string s(p_, static_cast<std::size_t>(n));
+    advance(static_cast<std::size_t>(n));
+    return s;
+  }
+  template <class T>
+  std::vector<T> get_vector(const char* what) {
+    const auto n = get<std::uint64_t>(what);
+    need_elements(n, sizeof(T), what);
+    std::vector<T> v(static_cast<std::size_t>(n));
+    if (n) std::memcpy(v.data(), p_, static_cast<std::size_t>(n) * sizeof(T));
+    advance(static_cast<std::size_t>(n) * sizeof(T));
+    return v;
+  }
+  std::size_t left() const { return left_; }
+  [[noreturn]] void fail(const std::string& problem) const { throw InputError(source_, "checkpoint", problem); }
+
+private:
+  void need(std::size_t n, const char* what) const {
+    if (n > left_) fail(fmt::format("ends inside {} (truncated or damaged)", what));
+  }
+  void need_elements(std::uint64_t count, std::size_t size, const char* what) const {
+    if (count > left_ / size) fail(fmt::format("{} claims {} entries, more than the file holds", what, count));
+  }
+  void advance(std::size_t n) {
+    p_ += n;
+    left_ -= n;
+  }
+  const char* p_;
+  std::size_t left_;
+  std::string source_;
+};
+
+void write_record(ByteWriter& w, const IncrementRecord& r) {
+  w.put<std::int32_t>(r.step);
+  w.put(r.alpha);
+  w.put(r.force);
+  w.put(r.half_width);
+  w.put<std::int32_t>(r.contact_nodes);
+  w.put<std::int64_t>(r.newton_iterations);
+  w.put<std::int64_t>(r.factorizations);
+  w.put<std::int32_t>(r.cutbacks);
+  w.put<std::int64_t>(r.plastic_points);
+  w.put(r.max_strain_intensity);
+  w.put(r.wall_seconds);
+}
+
+IncrementRecord read_record(ByteReader& in) {
+  IncrementRecord r;
+  r.step = in.get<std::int32_t>("a curve row");
+  r.alpha = in.get<double>("a curve row");
+  r.force = in.get<double>("a curve row");
+  r.half_width = in.get<double>("a curve row");
+  r.contact_nodes = in.get<std::int32_t>("a curve row");
+  r.newton_iterations = in.get<std::int64_t>("a curve row");
+  r.factorizations = in.get<std::int64_t>("a curve row");
+  r.cutbacks = in.get<std::int32_t>("a curve row");
+  r.plastic_points = in.get<std::int64_t>("a curve row");
+  r.max_strain_intensity = in.get<double>("a curve row");
+  r.wall_seconds = in.get<double>("a curve row");
+  return r;
+}
+
+struct FaultPlan {
+  std::string event;
+  int at = 0;
+  std::map<std::string, int> seen;
+};
+
+FaultPlan& fault_plan() {
+  static FaultPlan plan = [] {
+    FaultPlan p;
+    if (const char* spec = std::getenv("INDENTSIM_FAULT")) {
+      const std::string s(spec);
+      const auto colon = s.find(':');
+      if (colon != std::string::npos) {
+        p.event = s.substr(0, colon);
+        p.at = std::atoi(s.c_str() + colon + 1);
+      }
+    }
+    return p;
+  }();
+  return plan;
+}
+
+bool fault_due(const char* event) {
+  FaultPlan& plan = fault_plan();
+  if (plan.event.empty() || plan.event != event) return false;
+  return ++plan.seen[event] == plan.at;
+}
+
+void write_all(int fd, const char* data, std::size_t size, const std::filesystem::path& file) {
+  while (size > 0) {
+    const ssize_t n = ::write(fd, data, size);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      throw std::runtime_error(fmt::format("writing {} failed: {}", file.string(), std::strerror(errno)));
+    }
+    data += n;
+    size -= static_cast<std::size_t>(n);
+  }
+}
+
+}  // namespace
+
+std::uint64_t fnv1a(const void* data, std::size_t size, std::uint64_t hash) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  for (std::size_t i = 0; i < size; ++i) {
+    hash ^= p[i];
+    hash *= 0x100000001b3ull;
+  }
+  return hash;
+}
+
+std::string serialize(const Checkpoint& c) {
+  ByteWriter payload;
+  payload.put_string(c.load_case_toml);
+  payload.put<std::uint64_t>(fnv1a(c.load_case_toml.data(), c.load_case_toml.size()));
+  payload.put(c.planned_contact_half_width);
+  payload.put_vector(c.mesh_x);
+  payload.put_vector(c.mesh_y);
+  const SimulationState& s = c.state;
+  payload.put(s.alpha);
+  payload.put(s.alpha_previous);
+  payload.put(s.deepest);
+  payload.put<std::uint8_t>(s.has_previous);
+  payload.put<std::int32_t>(s.rows);
+  payload.put<std::uint64_t>(s.next_target);
+  payload.put<std::uint8_t>(s.warned_fine_zone);
+  payload.put<std::uint64_t>(s.warnings.size());
+  for (const auto& w : s.warnings) payload.put_string(w);
+  payload.put_vector(s.u);
+  payload.put_vector(s.u_previous);
+  payload.put_vector(s.history);
+  payload.put_vector(s.in_contact);
+  payload.put<std::uint64_t>(c.curve.size());
+  for (const auto& r : c.curve) write_record(payload, r);
+  payload.put_vector(c.free_surface_depths);
+
+  ByteWriter file;
+  file.bytes().append(magic, sizeof(magic));
+  file.put<std::uint32_t>(checkpoint_format_version);
+  file.put<std::uint64_t>(payload.bytes().size());
+  file.bytes().append(payload.bytes());
+  file.put<std::uint64_t>(fnv1a(file.bytes().data(), file.bytes().size()));
+  return std::move(file.bytes());
+}
+
+Checkpoint deserialize(const std::string& bytes, const std::string& source) {
+  const auto fail = [&](const std::string& problem) { throw InputError(source, "checkpoint", problem); };
+  if (bytes.size() < header_size + sizeof(std::uint64_t))
+    fail(fmt::format("is {} bytes long, too short to be a checkpoint", bytes.size()));
+  if (std::memcmp(bytes.data(), magic, sizeof(magic)) != 0) fail("is not an indentsim checkpoint (bad magic bytes)");
+  std::uint32_t version;
+  std::memcpy(&version, bytes.data() + sizeof(magic), sizeof(version));
+  if (version != checkpoint_format_version)
+    fail(fmt::format("was written in checkpoint format {}; this indentsim reads format {}", version,
+                     checkpoint_format_version));
+  std::uint64_t length;
+  std::memcpy(&length, bytes.data() + sizeof(magic) + sizeof(version), sizeof(length));
+  if (length != bytes.size() - header_size - sizeof(std::uint64_t))
+    fail(fmt::format("holds {} bytes of data where its header promises {} (truncated or damaged)",
+                     bytes.size() - std::min(bytes.size(), header_size + sizeof(std::uint64_t)), length));
+  std::uint64_t stored;
+  std::memcpy(&stored, bytes.data() + bytes.size() - sizeof(stored), sizeof(stored));
+  if (stored != fnv1a(bytes.data(), bytes.size() - sizeof(stored)))
+    fail("fails its checksum (the file is damaged)");
+
+  ByteReader in(bytes.data() + header_size, static_cast<std::size_t>(length), source);
+  Checkpoint c;
+  c.load_case_toml = in.get_string("the load case");
+  if (in.get<std::uint64_t>("the load case hash") != fnv1a(c.load_case_toml.data(), c.load_case_toml.size()))
+    in.fail("its load case does not match the load case hash");
+  c.planned_contact_half_width = in.get<double>("the mesh plan");
+  c.mesh_x = in.get_vector<double>("the mesh");
+  c.mesh_y = in.get_vector<double>("the mesh");
+  SimulationState& s = c.state;
+  s.alpha = in.get<double>("the state");
+  s.alpha_previous = in.get<double>("the state");
+  s.deepest = in.get<double>("the state");
+  s.has_previous = in.get<std::uint8_t>("the state") != 0;
+  s.rows = in.get<std::int32_t>("the state");
+  s.next_target = in.get<std::uint64_t>("the state");
+  s.warned_fine_zone = in.get<std::uint8_t>("the state") != 0;
+  const auto warnings = in.get<std::uint64_t>("the warnings");
+  if (warnings > in.left()) in.fail("claims more warnings than the file holds");
+  for (std::uint64_t k = 0; k < warnings; ++k) s.warnings.push_back(in.get_string("a warning"));
+  s.u = in.get_vector<double>("the displacement");
+  s.u_previous = in.get_vector<double>("the previous displacement");
+  s.history = in.get_vector<double>("the material history");
+  s.in_contact = in.get_vector<char>("the contact set");
+  const auto rows = in.get<std::uint64_t>("the curve");
+  if (rows > in.left()) in.fail("claims more curve rows than the file holds");
+  for (std::uint64_t k = 0; k < rows; ++k) c.curve.push_back(read_record(in));
+  c.free_surface_depths = in.get_vector<double>("the summary data");
+  if (in.left() != 0) in.fail(fmt::format("has {} unexplained bytes at its end", in.left()));
+  if (c.free_surface_depths.size() != c.curve.size() || s.rows != static_cast<int>(c.curve.size()) ||
+      s.next_target != c.curve.size())
+    in.fail("its curve, summary and state disagree on the number of increments");
+  return c;
+}
+
+void write_checkpoint(const std::filesystem::path& file, const Checkpoint& checkpoint) {
+  const std::string bytes = serialize(checkpoint);
+  const std::filesystem::path temporary = file.string() + ".tmp";
+  const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) throw std::runtime_error(fmt::format("cannot write {}: {}", temporary.string(), std::strerror(errno)));
+  try {
+    const std::size_t half = bytes.size() / 2;
+    write_all(fd, bytes.data(), half, temporary);
+    if (fault_due("checkpoint")) std::raise(SIGKILL);  // robustness tests: die mid-write
+    write_all(fd, bytes.data() + half, bytes.size() - half, temporary);
+    if (::fsync(fd) != 0) throw std::runtime_error("fsync of " + temporary.string() + " failed");
+  } catch (...) {
+    ::close(fd);
+    throw;
+  }
+  ::close(fd);
+  std::filesystem::rename(temporary, file);
+  // Make the rename itself durable.
+  const int dir = ::open(file.parent_path().empty() ? "." : file.parent_path().c_str(), O_RDONLY | O_CLOEXEC);
+  if (dir >= 0) {
+    ::fsync(dir);
+    ::close(dir);
+  }
+}
+
+Checkpoint read_checkpoint(const std::filesystem::path& file) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(file, ec))
+    throw InputError(file.string(), "checkpoint", "is not a readable file");
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw InputError(file.string(), "checkpoint", "cannot be opened");
+  std::ostringstream bytes;
+  bytes << in.rdbuf();
+  return deserialize(bytes.str(), file.string());
+}
+
+std::filesystem::path save_checkpoint(const std::filesystem::path& dir, const Checkpoint& checkpoint, int keep) {
+  std::filesystem::create_directories(dir);
+  const int step = checkpoint.curve.empty() ? 0 : checkpoint.curve.back().step;
+  const std::filesystem::path file = dir / fmt::format("checkpoint_{:06d}.ck", step);
+  write_checkpoint(file, checkpoint);
+  std::vector<std::filesystem::path> existing;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    const auto& p = entry.path();
+    if (p.extension() == ".ck" && p.filename().string().rfind("checkpoint_", 0) == 0) existing.push_back(p);
+    else if (p.extension() == ".tmp") std::filesystem::remove(p);  // left by a killed write
+  }
+  std::sort(existing.begin(), existing.end());
+  for (std::size_t k = 0; k + static_cast<std::size_t>(keep) < existing.size(); ++k) std::filesystem::remove(existing[k]);
+  return file;
+}
+
+void inject_fault(const char* event) {
+  if (fault_due(event)) std::raise(SIGKILL);
+}
+
+std::string first_physics_difference(const LoadCase& a, const LoadCase& b) {
+  const struct {
+    const char* key;
+    bool same;
+  } keys[] = {
+      {"geometry.lx", a.geometry.lx == b.geometry.lx},
+      {"geometry.ly", a.geometry.ly == b.geometry.ly},
+      {"punch.radius", a.punch.radius == b.punch.radius},
+      {"material.model", a.material.model == b.material.model},
+      {"material.E", a.material.E == b.material.E},
+      {"material.nu", a.material.nu == b.material.nu},
+      {"material.e0", a.material.e0 == b.material.e0},
+      {"material.hardening", a.material.hardening == b.material.hardening},
+      {"material.kappa", a.material.kappa == b.material.kappa},
+      {"material.n", a.material.n == b.material.n},
+      {"mesh.contact_nodes", a.mesh.contact_nodes == b.mesh.contact_nodes},
+      {"mesh.contact_half_width", a.mesh.contact_half_width == b.mesh.contact_half_width},
+      {"mesh.fine_width", a.mesh.fine_width == b.mesh.fine_width},
+      {"mesh.fine_depth", a.mesh.fine_depth == b.mesh.fine_depth},
+      {"mesh.growth", a.mesh.growth == b.mesh.growth},
+  };
+  for (const auto& k : keys)
+    if (!k.same) return k.key;
+  return "";
+}
+
+Checkpoint make_checkpoint(const Simulation& sim, const std::vector<IncrementRecord>& curve,
+                           const std::vector<double>& free_surface_depths) {
+  Checkpoint c;
+  c.load_case_toml = to_toml(sim.load_case());
+  c.planned_contact_half_width = sim.plan().contact_half_width_estimate;
+  c.mesh_x = sim.mesh().x();
+  c.mesh_y = sim.mesh().y();
+  c.state = sim.state();
+  c.curve = curve;
+  c.free_surface_depths = free_surface_depths;
+  return c;
+}
+
+ResumedRun resume_from(const Checkpoint& c, const std::string& source, const std::vector<std::string>& overrides) {
+  const auto fail = [&](const std::string& problem) { throw InputError(source, "checkpoint", problem); };
+  LoadCase stored;
+  try {
+    stored = parse_load_case(c.load_case_toml, source);
+  } catch (const InputError& e) {
+    fail("its load case is not valid: " + e.key() + ": " + e.problem());
+  }
+  ResumedRun run;
+  run.load_case = parse_load_case(c.load_case_toml, source, overrides);
+  if (const std::string key = first_physics_difference(stored, run.load_case); !key.empty())
+    throw InputError(source, key, "cannot change when resuming: the checkpointed history depends on it");
+
+  // The new load path must pass through the history already computed.
+  const std::vector<double> before = plan_increments(stored.load), after = plan_increments(run.load_case.load);
+  const std::size_t done = static_cast<std::size_t>(c.state.next_target);
+  if (done == 0 || done > before.size()) fail("its state does not fit its own load path");
+  if (after.size() < done || !std::equal(before.begin(), before.begin() + static_cast<std::ptrdiff_t>(done), after.begin()))
+    throw InputError(source, "load.path",
+                     fmt::format("must follow the checkpointed history for its first {} increments (up to alpha = "
+                                 "{:.6g} m): keep the path's waypoints and increments up to there",
+                                 done - 1, before[done - 1]));
+  if (!(c.planned_contact_half_width > 0.0)) fail("holds no valid mesh plan");
+  run.simulation = std::make_unique<Simulation>(run.load_case, c.planned_contact_half_width);
+  if (run.simulation->mesh().x() != c.mesh_x || run.simulation->mesh().y() != c.mesh_y)
+    fail("its mesh does not match the mesh its load case gives (written by another version of indentsim?)");
+  try {
+    run.simulation->restore(c.state);
+  } catch (const std::invalid_argument& e) {
+    fail(std::string("its state does not fit its load case: ") + e.what());
+  }
+  return run;
+}
+
+}  // namespace indentsim

@@ -1,0 +1,215 @@
+// Checkpoints and restarts: bit-for-bit continuation, kills at any moment, branching load paths,
+// and rejection of every damaged or mismatched checkpoint.
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "indentsim/checkpoint.hpp"
+#include "indentsim/error.hpp"
+#include "indentsim/io.hpp"
+#include "test_support.hpp"
+
+namespace fs = std::filesystem;
+using namespace indentsim;
+using indentsim::testing::shipped_case;
+
+namespace {
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// curve.csv without its wall-clock column (the last one).
+std::string curve_without_timing(const fs::path& file) {
+  std::istringstream in(slurp(file));
+  std::string line, out;
+  while (std::getline(in, line)) out += line.substr(0, line.rfind(',')) + "\n";
+  return out;
+}
+
+// A small run's checkpoint, built through the library.
+Checkpoint small_checkpoint(const std::string& model) {
+  Simulation sim(shipped_case("deep_plastic.toml", {"material.model=" + model, "mesh.contact_nodes=3",
+                                                     "load.path=[0, 5e-5, 2e-5]", "load.increments=4"}));
+  std::vector<IncrementRecord> rows;
+  std::vector<double> depths;
+  sim.run([&](const IncrementRecord& r) {
+    rows.push_back(r);
+    depths.push_back(sim.free_surface_depth());
+  });
+  return make_checkpoint(sim, rows, depths);
+}
+
+class CheckpointCli : public ::testing::Test {
+protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("indentsim_ck_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+            std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  // Runs the CLI; returns the exit status (128 + signal when killed by one).
+  int cli(const std::string& args, const std::string& fault = "") {
+    const std::string env = fault.empty() ? "" : "INDENTSIM_FAULT=" + fault + " ";
+    const std::string command = env + std::string(INDENTSIM_CLI) + " " + args + " >" + (dir_ / "out.txt").string() +
+                                " 2>" + (dir_ / "err.txt").string();
+    const int raw = std::system(command.c_str());
+    if (WIFEXITED(raw)) return WEXITSTATUS(raw);
+    return WIFSIGNALED(raw) ? 128 + WTERMSIG(raw) : -1;
+  }
+  std::string err() const { return slurp(dir_ / "err.txt"); }
+
+  fs::path dir_;
+};
+
+const std::string history_case = "loadcases/load_unload.toml";
+const std::string small = " --quiet --set mesh.contact_nodes=6 --set output.checkpoint_every=3";
+
+}  // namespace
+
+TEST(Checkpoint, RoundTripIsExact) {
+  for (const char* model : {"elastic", "ilyushin", "j2"}) {
+    SCOPED_TRACE(model);
+    const Checkpoint c = small_checkpoint(model);
+    const std::string bytes = serialize(c);
+    const Checkpoint back = deserialize(bytes, "memory");
+    EXPECT_EQ(serialize(back), bytes);
+    EXPECT_EQ(back.state.u, c.state.u);
+    EXPECT_EQ(back.state.history, c.state.history);
+    EXPECT_EQ(back.curve.size(), c.curve.size());
+  }
+}
+
+TEST(Checkpoint, EveryTruncationIsRejected) {
+  const std::string bytes = serialize(small_checkpoint("j2"));
+  ASSERT_GT(bytes.size(), 1000u);
+  for (std::size_t n = 0; n < bytes.size(); ++n) {
+    try {
+      deserialize(bytes.substr(0, n), "cut.ck");
+      FAIL() << "accepted a checkpoint cut to " << n << " of " << bytes.size() << " bytes";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.file(), "cut.ck");
+    }
+  }
+  EXPECT_THROW(deserialize(bytes + "x", "long.ck"), InputError);
+}
+
+TEST(Checkpoint, RandomBitFlipsAreRejected) {
+  const std::string bytes = serialize(small_checkpoint("ilyushin"));
+  std::mt19937_64 rng(2026);
+  for (int trial = 0; trial < 3000; ++trial) {
+    std::string damaged = bytes;
+    const int flips = 1 + trial % 4;
+    for (int f = 0; f < flips; ++f) damaged[rng() % damaged.size()] ^= static_cast<char>(1u << (rng() % 8));
+    if (damaged == bytes) continue;  // two flips that cancelled
+    EXPECT_THROW(deserialize(damaged, "flipped.ck"), InputError) << "trial " << trial;
+  }
+}
+
+TEST(Checkpoint, OtherFormatVersionIsNamed) {
+  std::string bytes = serialize(small_checkpoint("elastic"));
+  bytes[8] = 7;  // the version field follows the 8 magic bytes
+  try {
+    deserialize(bytes, "old.ck");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(e.problem().find("format 7"), std::string::npos) << e.problem();
+  }
+}
+
+TEST_F(CheckpointCli, KillsAtAnyMomentLoseNothing) {
+  const std::string source = indentsim::testing::source_path(history_case);
+  ASSERT_EQ(cli("run " + source + small + " --out " + (dir_ / "full").string()), 0) << err();
+  const std::string expected = curve_without_timing(dir_ / "full" / "curve.csv");
+  // After increments 5 and 14 (unloading), and halfway through the 2nd and 5th checkpoint writes.
+  for (const std::string fault : {"increment:5", "increment:14", "checkpoint:2", "checkpoint:5"}) {
+    SCOPED_TRACE(fault);
+    const fs::path out = dir_ / ("killed_" + fault.substr(0, fault.find(':')) + fault.substr(fault.find(':') + 1));
+    EXPECT_EQ(cli("run " + source + small + " --out " + out.string(), fault), 128 + SIGKILL);
+    ASSERT_EQ(cli("resume " + (out / "checkpoints").string() + " --quiet"), 0) << err();
+    EXPECT_EQ(curve_without_timing(out / "curve.csv"), expected);
+    EXPECT_EQ(slurp(out / "summary.json"), slurp(dir_ / "full" / "summary.json"));
+  }
+}
+
+TEST_F(CheckpointCli, SigtermCheckpointsAndExitsCleanly) {
+  // A run stopped by SIGTERM from outside: its checkpoint continues it to the same curve.
+  const std::string source = indentsim::testing::source_path("loadcases/deep_plastic.toml");
+  const std::string args = " --quiet --set mesh.contact_nodes=10 --set load.increments=40 --set output.checkpoint_every=0";
+  ASSERT_EQ(cli("run " + source + args + " --out " + (dir_ / "full").string()), 0) << err();
+  const fs::path out = dir_ / "stopped";
+  const std::string command = std::string(INDENTSIM_CLI) + " run " + source + args + " --out " + out.string() +
+                              " 2>" + (dir_ / "err.txt").string() + " & pid=$!; " +
+                              "while [ ! -s " + (out / "curve.csv").string() + " ] || " +
+                              "[ $(wc -l < " + (out / "curve.csv").string() + ") -lt 4 ]; do sleep 0.05; done; " +
+                              "kill -TERM $pid; wait $pid";
+  const int raw = std::system(("bash -c '" + command + "'").c_str());
+  ASSERT_TRUE(WIFEXITED(raw));
+  if (WEXITSTATUS(raw) == 0) GTEST_SKIP() << "the run finished before the signal arrived";
+  EXPECT_EQ(WEXITSTATUS(raw), 128 + SIGTERM) << err();
+  EXPECT_NE(err().find("resume with"), std::string::npos) << err();
+  ASSERT_EQ(cli("resume " + (out / "checkpoints").string() + " --quiet"), 0) << err();
+  EXPECT_EQ(curve_without_timing(out / "curve.csv"), curve_without_timing(dir_ / "full" / "curve.csv"));
+}
+
+TEST_F(CheckpointCli, BranchFromACheckpointEqualsOneRunOverTheCombinedPath) {
+  const std::string source = indentsim::testing::source_path("loadcases/deep_plastic.toml");
+  const std::string args = " --quiet --set mesh.contact_nodes=6 --set material.model=ilyushin";
+  ASSERT_EQ(cli("run " + source + args + " --set load.path=[0,5e-5,0] --set load.increments=[8,8] --out " +
+                (dir_ / "combined").string()),
+            0)
+      << err();
+  ASSERT_EQ(cli("run " + source + args + " --set load.path=[0,5e-5] --set load.increments=[8] --out " +
+                (dir_ / "branch").string()),
+            0)
+      << err();
+  ASSERT_EQ(cli("resume " + (dir_ / "branch" / "checkpoints").string() +
+                " --quiet --set load.path=[0,5e-5,0] --set load.increments=[8,8]"),
+            0)
+      << err();
+  EXPECT_EQ(curve_without_timing(dir_ / "branch" / "curve.csv"), curve_without_timing(dir_ / "combined" / "curve.csv"));
+  EXPECT_EQ(slurp(dir_ / "branch" / "summary.json"), slurp(dir_ / "combined" / "summary.json"));
+}
+
+TEST_F(CheckpointCli, DamagedOrMismatchedCheckpointsExitWith2AndOverwriteNothing) {
+  const std::string source = indentsim::testing::source_path("loadcases/deep_plastic.toml");
+  const fs::path run = dir_ / "run";
+  ASSERT_EQ(cli("run " + source + " --quiet --set mesh.contact_nodes=4 --set load.increments=3 --out " + run.string()), 0);
+  const fs::path good = run / "checkpoints" / "checkpoint_000003.ck";
+  ASSERT_TRUE(fs::exists(good));
+  const std::string bytes = slurp(good);
+  const std::string curve_before = slurp(run / "curve.csv");
+  const auto write = [&](const std::string& name, const std::string& content) {
+    const fs::path p = dir_ / name;
+    std::ofstream(p, std::ios::binary) << content;
+    return p;
+  };
+  std::string flipped = bytes;
+  flipped[bytes.size() / 2] ^= 0x10;
+  const fs::path bad[] = {write("truncated.ck", bytes.substr(0, bytes.size() / 3)), write("flipped.ck", flipped),
+                          write("empty.ck", ""), write("text.ck", "[geometry]\nlx = 1\n"), dir_ / "absent.ck"};
+  for (const fs::path& p : bad) {
+    SCOPED_TRACE(p.filename().string());
+    EXPECT_EQ(cli("resume " + p.string() + " --quiet --out " + run.string()), 2);
+    EXPECT_NE(err().find(p.filename().string()), std::string::npos) << err();
+    EXPECT_EQ(slurp(run / "curve.csv"), curve_before);
+  }
+  // A physics override is refused, naming the key; a path that leaves the history too.
+  EXPECT_EQ(cli("resume " + good.string() + " --quiet --set material.E=1e11"), 2);
+  EXPECT_NE(err().find("material.E"), std::string::npos) << err();
+  EXPECT_EQ(cli("resume " + good.string() + " --quiet --set load.path=[0,4e-5,0]"), 2);
+  EXPECT_NE(err().find("load.path"), std::string::npos) << err();
+  EXPECT_EQ(slurp(run / "curve.csv"), curve_before);
+}
