@@ -66,7 +66,7 @@ const std::vector<SectionSpec>& schema() {
       {"output",
        false,
        {{"dir", false}, {"fields_every", false}, {"profile_depths", false}, {"checkpoint_every", false}}},
-      {"solver", false, {{"tolerance", false}, {"max_newton", false}, {"max_cutbacks", false}}},
+      {"solver", false, {{"tolerance", false}, {"max_newton", false}, {"max_cutbacks", false}, {"linear", false}}},
   };
   return sections;
 }
@@ -285,6 +285,12 @@ LoadCase from_table(const toml::table& root, const std::string& source) {
   r.read_integer("output", "checkpoint_every", lc.output.checkpoint_every);
 
   r.read_number("solver", "tolerance", lc.solver.tolerance);
+  std::string linear = "klu";
+  r.read_string("solver", "linear", linear);
+  if (linear == "auto") lc.solver.linear = LinearSolverChoice::automatic;
+  else if (linear == "klu") lc.solver.linear = LinearSolverChoice::klu;
+  else if (linear == "cholmod") lc.solver.linear = LinearSolverChoice::cholmod;
+  else r.fail("solver.linear", fmt::format("\"{}\" is not a linear solver (auto, klu, cholmod)", linear));
   r.read_integer("solver", "max_newton", lc.solver.max_newton);
   r.read_integer("solver", "max_cutbacks", lc.solver.max_cutbacks);
   validate(lc);
@@ -405,8 +411,11 @@ std::string to_toml(const LoadCase& lc) {
   t += fmt::format("\n[output]\n{}\nfields_every = {}\nprofile_depths = {}\ncheckpoint_every = {}\n\n",
                    dir_line.str(), lc.output.fields_every, numbers(lc.output.profile_depths),
                    lc.output.checkpoint_every);
-  t += fmt::format("[solver]\ntolerance = {:.17g}\nmax_newton = {}\nmax_cutbacks = {}\n", lc.solver.tolerance,
-                   lc.solver.max_newton, lc.solver.max_cutbacks);
+  const char* linear = lc.solver.linear == LinearSolverChoice::klu       ? "klu"
+                       : lc.solver.linear == LinearSolverChoice::cholmod ? "cholmod"
+                                                                         : "auto";
+  t += fmt::format("[solver]\ntolerance = {:.17g}\nmax_newton = {}\nmax_cutbacks = {}\nlinear = \"{}\"\n",
+                   lc.solver.tolerance, lc.solver.max_newton, lc.solver.max_cutbacks, linear);
   return t;
 }
 

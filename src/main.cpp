@@ -95,9 +95,10 @@ private:
 void print_mesh(const Simulation& sim) {
   const auto& p = sim.plan();
   fmt::print("mesh: {} x {} nodes, {} unknowns; fine zone {:.4g} m x {:.4g} m at spacing {:.4g} m "
-             "(estimated final contact half-width {:.4g} m), growth {:.3f}\n",
+             "(estimated final contact half-width {:.4g} m), growth {:.3f}; linear solver {}\n",
              p.nodes_x, p.nodes_y, sim.mesh().equations(), p.fine_width, p.fine_depth, p.fine_spacing,
-             p.contact_half_width_estimate, p.growth);
+             p.contact_half_width_estimate, p.growth,
+             sim.linear_solver() == LinearSolverKind::cholmod ? "CHOLMOD" : "KLU");
 }
 
 int command_check(const std::string& file, const std::vector<std::string>& overrides) {

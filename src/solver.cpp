@@ -5,6 +5,7 @@
 #include <cstring>
 #include <type_traits>
 
+#include "cholmod_solver.hpp"
 #include "sundials_handles.hpp"
 
 namespace indentsim {
@@ -124,7 +125,8 @@ struct NewtonSolver::Impl {
   sundials::Vector u, u_scale, f_scale;
   sundials::Matrix jacobian;
   KluWithReuse klu;
-  sundials::LinearSolver linear_solver;
+  sundials::LinearSolver klu_shell;       // our SUNLinearSolver around SUNLinSol_KLU
+  std::unique_ptr<CholmodSolver> cholmod;  // or CHOLMOD's supernodal Cholesky
   sundials::KinsolMemory kinsol;
   double alpha = 0.0;
   std::string last_message;
@@ -139,22 +141,28 @@ struct NewtonSolver::Impl {
         jacobian(SUNSparseMatrix(eq.size(), eq.size(), eq.pattern().nonzeros(), CSC_MAT, context)),
         kinsol(context) {
     if (!jacobian) throw std::runtime_error("SUNSparseMatrix failed");
-    klu.klu.reset(SUNLinSol_KLU(u.get(), jacobian.get(), context));
-    if (!klu.klu) throw std::runtime_error("SUNLinSol_KLU failed");
-    // AMD fill-reducing ordering: 2-3x faster with less fill than KLU's default COLAMD on
-    // finite-element matrices (../shared/STACK.md).
-    sundials::check(SUNLinSol_KLUSetOrdering(klu.klu.get(), 0), "SUNLinSol_KLUSetOrdering");
-
-    linear_solver.reset(SUNLinSolNewEmpty(context));
-    if (!linear_solver) throw std::runtime_error("SUNLinSolNewEmpty failed");
-    linear_solver->content = &klu;
-    linear_solver->ops->gettype = KluWithReuse::type;
-    linear_solver->ops->getid = KluWithReuse::id;
-    linear_solver->ops->initialize = KluWithReuse::initialize;
-    linear_solver->ops->setup = KluWithReuse::setup;
-    linear_solver->ops->solve = KluWithReuse::solve;
-    linear_solver->ops->lastflag = KluWithReuse::last_flag;
-    linear_solver->ops->free = KluWithReuse::free;
+    SUNLinearSolver linear_solver = nullptr;
+    if (settings.linear == LinearSolverKind::cholmod) {
+      cholmod = std::make_unique<CholmodSolver>(context);
+      linear_solver = cholmod->get();
+    } else {
+      klu.klu.reset(SUNLinSol_KLU(u.get(), jacobian.get(), context));
+      if (!klu.klu) throw std::runtime_error("SUNLinSol_KLU failed");
+      // AMD fill-reducing ordering: 2-3x faster with less fill than KLU's default COLAMD on
+      // finite-element matrices (../shared/STACK.md).
+      sundials::check(SUNLinSol_KLUSetOrdering(klu.klu.get(), 0), "SUNLinSol_KLUSetOrdering");
+      klu_shell.reset(SUNLinSolNewEmpty(context));
+      if (!klu_shell) throw std::runtime_error("SUNLinSolNewEmpty failed");
+      linear_solver = klu_shell.get();
+      linear_solver->content = &klu;
+      linear_solver->ops->gettype = KluWithReuse::type;
+      linear_solver->ops->getid = KluWithReuse::id;
+      linear_solver->ops->initialize = KluWithReuse::initialize;
+      linear_solver->ops->setup = KluWithReuse::setup;
+      linear_solver->ops->solve = KluWithReuse::solve;
+      linear_solver->ops->lastflag = KluWithReuse::last_flag;
+      linear_solver->ops->free = KluWithReuse::free;
+    }
 
     N_VConst(1.0 / settings.displacement_scale, u_scale.get());
     N_VConst(1.0 / settings.force_scale, f_scale.get());
@@ -162,7 +170,7 @@ struct NewtonSolver::Impl {
     sundials::check(KINInit(kinsol, residual_callback, u.get()), "KINInit");
     sundials::check(KINSetUserData(kinsol, this), "KINSetUserData");
     sundials::check(KINSetErrHandlerFn(kinsol, error_callback, this), "KINSetErrHandlerFn");
-    sundials::check(KINSetLinearSolver(kinsol, linear_solver.get(), jacobian.get()), "KINSetLinearSolver");
+    sundials::check(KINSetLinearSolver(kinsol, linear_solver, jacobian.get()), "KINSetLinearSolver");
     sundials::check(KINSetJacFn(kinsol, jacobian_callback), "KINSetJacFn");
     // Exact (semi-smooth) Newton: a fresh Jacobian every iteration.  The active set can change
     // at any iteration, and a stale Jacobian would carry the wrong contact rows.
@@ -225,8 +233,8 @@ NewtonReport NewtonSolver::solve(double alpha, std::vector<double>& u, Globaliza
   m.residual_history.clear();
   double* data = N_VGetArrayPointer(m.u.get());
   std::copy(u.begin(), u.end(), data);
-  const long factorizations_before = m.klu.numeric_factorizations;
-  const long analyses_before = m.klu.symbolic_analyses;
+  const long factorizations_before = total_factorizations();
+  const long analyses_before = total_symbolic_analyses();
 
   NewtonReport report;
   const int strategy = globalization == Globalization::line_search ? KIN_LINESEARCH : KIN_NONE;
@@ -234,8 +242,8 @@ NewtonReport NewtonSolver::solve(double alpha, std::vector<double>& u, Globaliza
   long iterations = 0;
   KINGetNumNonlinSolvIters(m.kinsol, &iterations);
   report.iterations = iterations;
-  report.factorizations = m.klu.numeric_factorizations - factorizations_before;
-  report.symbolic_analyses = m.klu.symbolic_analyses - analyses_before;
+  report.factorizations = total_factorizations() - factorizations_before;
+  report.symbolic_analyses = total_symbolic_analyses() - analyses_before;
   report.residual = m.scaled_residual(data);
   // Trust the residual, not the return code alone: KIN_STEP_LT_STPTOL and friends are not
   // convergence, and a success must really satisfy the tolerance.
@@ -246,7 +254,11 @@ NewtonReport NewtonSolver::solve(double alpha, std::vector<double>& u, Globaliza
   return report;
 }
 
-long NewtonSolver::total_factorizations() const { return impl_->klu.numeric_factorizations; }
-long NewtonSolver::total_symbolic_analyses() const { return impl_->klu.symbolic_analyses; }
+long NewtonSolver::total_factorizations() const {
+  return impl_->cholmod ? impl_->cholmod->numeric_factorizations() : impl_->klu.numeric_factorizations;
+}
+long NewtonSolver::total_symbolic_analyses() const {
+  return impl_->cholmod ? impl_->cholmod->symbolic_analyses() : impl_->klu.symbolic_analyses;
+}
 
 }  // namespace indentsim

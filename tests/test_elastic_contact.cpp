@@ -131,3 +131,18 @@ TEST(ElasticContact, SmallerIncrementsGiveTheSameElasticSolution) {
   many.run();
   EXPECT_NEAR(one.contact().force, many.contact().force, 1e-9 * many.contact().force);
 }
+
+TEST(ElasticContact, ObservedConvergenceOrderOfTheForceIsAtLeastOne) {
+  // P at the final depth for contact_nodes 8, 16, 32 (the far field refines with them):
+  // order = log2((P8 - P16) / (P16 - P32)).
+  std::vector<double> force;
+  for (int n : {8, 16, 32}) {
+    Simulation sim(indentsim::testing::shipped_case(
+        "elastic.toml", {"mesh.contact_nodes=" + std::to_string(n), "load.increments=1", "solver.linear=auto"}));
+    sim.run();
+    force.push_back(sim.contact().force);
+  }
+  const double order = std::log2((force[0] - force[1]) / (force[1] - force[2]));
+  RecordProperty("observed_order", fmt::format("{:.3f}", order));
+  EXPECT_GE(order, 1.0) << force[0] << " " << force[1] << " " << force[2];
+}

@@ -53,7 +53,10 @@ struct OutputInput {
   int checkpoint_every = 10;  ///< checkpoint every N increments and at the end (0: only on SIGINT/SIGTERM)
 };
 
+enum class LinearSolverChoice { automatic, klu, cholmod };
+
 struct SolverInput {
+  LinearSolverChoice linear = LinearSolverChoice::klu;  ///< "klu" (default) | "cholmod" | "auto" 
   double tolerance = 1e-11;  ///< residual max-norm relative to E* x max depth
   int max_newton = 50;       ///< Newton iterations per increment before a cutback
   int max_cutbacks = 10;     ///< halvings of one increment before the run stops

@@ -75,6 +75,8 @@ public:
   double free_surface_depth() const;
   std::vector<LayerForce> layer_forces() const;
   long symbolic_analyses() const { return newton_->total_symbolic_analyses(); }
+  /// The sparse direct solver chosen for this run (solver.linear, "auto" resolved).
+  LinearSolverKind linear_solver() const { return linear_solver_; }
   /// Warnings raised so far (each once), e.g. a contact zone that left the fine zone.
   const std::vector<std::string>& warnings() const { return warnings_; }
 
@@ -104,6 +106,7 @@ private:
   std::vector<std::string> warnings_;
   bool warned_fine_zone_ = false;
   NewtonReport last_report_;
+  LinearSolverKind linear_solver_ = LinearSolverKind::klu;
 };
 
 }  // namespace indentsim

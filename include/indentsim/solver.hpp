@@ -46,7 +46,12 @@ private:
   std::vector<double> internal_force_;                    // scratch, sized once
 };
 
+/// The sparse direct solver under KINSOL: SuiteSparse KLU (through SUNLinSol_KLU) or CHOLMOD's
+/// supernodal Cholesky (through a SUNLinearSolver of our own).
+enum class LinearSolverKind { klu, cholmod };
+
 struct NewtonSettings {
+  LinearSolverKind linear = LinearSolverKind::klu;
   double displacement_scale = 1.0;  ///< typical |u| [m] (KINSOL's uscale = 1/this)
   double force_scale = 1.0;         ///< typical |F| [N/m] (KINSOL's fscale = 1/this)
   double tolerance = 1e-11;         ///< on max |F| / force_scale

@@ -1,0 +1,54 @@
+// KLU and CHOLMOD under KINSOL: the same curves to solver tolerance, with contact (active rows
+// eliminated for the Cholesky), plasticity, unloading and separation.
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "indentsim/simulation.hpp"
+#include "test_support.hpp"
+
+using namespace indentsim;
+using indentsim::testing::shipped_case;
+
+namespace {
+std::vector<IncrementRecord> curve(const std::string& name, const std::vector<std::string>& overrides) {
+  Simulation sim(shipped_case(name, overrides));
+  std::vector<IncrementRecord> rows;
+  sim.run([&](const IncrementRecord& r) { rows.push_back(r); });
+  return rows;
+}
+}  // namespace
+
+TEST(LinearSolvers, KluAndCholmodGiveTheSameCurve) {
+  for (const char* name : {"elastic.toml", "paper.toml", "load_unload.toml"}) {
+    SCOPED_TRACE(name);
+    const std::vector<std::string> common{"mesh.contact_nodes=8"};
+    auto with = [&](const char* linear) {
+      auto o = common;
+      o.push_back(std::string("solver.linear=") + linear);
+      return curve(name, o);
+    };
+    const auto klu = with("klu"), cholmod = with("cholmod");
+    ASSERT_EQ(klu.size(), cholmod.size());
+    double peak = 0;
+    for (const auto& r : klu) peak = std::max(peak, r.force);
+    for (std::size_t k = 0; k < klu.size(); ++k) {
+      EXPECT_NEAR(cholmod[k].force, klu[k].force, 1e-9 * peak) << "step " << k;
+      EXPECT_EQ(cholmod[k].contact_nodes, klu[k].contact_nodes) << "step " << k;
+    }
+  }
+}
+
+TEST(LinearSolvers, AutoPicksCholmodForLargeMeshesOnly) {
+  Simulation small(shipped_case("elastic.toml", {"mesh.contact_nodes=3", "solver.linear=auto", "load.increments=1"}));
+  Simulation large(shipped_case("elastic.toml", {"mesh.contact_nodes=10", "solver.linear=auto", "load.increments=1"}));
+  ASSERT_LT(small.mesh().equations(), 1000);
+  ASSERT_GT(large.mesh().equations(), 1000);
+  EXPECT_EQ(small.linear_solver(), LinearSolverKind::klu);
+  EXPECT_EQ(large.linear_solver(), LinearSolverKind::cholmod);
+  small.run();
+  large.run();
+  EXPECT_EQ(large.symbolic_analyses(), 1);  // CHOLMOD analyses the fixed pattern once too
+  EXPECT_GT(small.contact().force, 0.0);
+  EXPECT_GT(large.contact().force, 0.0);
+}
