@@ -110,7 +110,10 @@ ElasticStiffness::ElasticStiffness(const Mesh& mesh, const ElasticMaterial& mate
   by_class_.resize(static_cast<std::size_t>(mesh.width_classes()) * mesh.height_classes());
   for (int w = 0; w < mesh.width_classes(); ++w)
     for (int h = 0; h < mesh.height_classes(); ++h)
-      by_class_[w * mesh.height_classes() + h] = closed_form_stiffness({widths[w], heights[h]}, lame);
+      by_class_[w * mesh.height_classes() + h] =
+          mesh.element_kind() == ElementKind::q1
+              ? closed_form_stiffness({widths[w], heights[h]}, lame)  // the paper's exact element
+              : gauss_stiffness({widths[w], heights[h]}, plane_strain_stiffness(lame), ElementKind::bbar);
 
   values_.assign(static_cast<std::size_t>(pattern.nonzeros()), 0.0);
   for (int ei = 0; ei < mesh.elements_x(); ++ei)
@@ -157,7 +160,7 @@ std::array<VoigtVector, 4> gauss_point_strains(const Mesh& mesh, int ei, int ej,
   const auto& points = gauss_points_2x2();
   std::array<VoigtVector, 4> strains;
   for (std::size_t g = 0; g < points.size(); ++g)
-    strains[g] = strain_displacement(rect, points[g].xi, points[g].eta) * ue;
+    strains[g] = strain_displacement(rect, points[g].xi, points[g].eta, mesh.element_kind()) * ue;
   return strains;
 }
 

@@ -333,6 +333,7 @@ std::string first_physics_difference(const LoadCase& a, const LoadCase& b) {
       {"material.hardening", a.material.hardening == b.material.hardening},
       {"material.kappa", a.material.kappa == b.material.kappa},
       {"material.n", a.material.n == b.material.n},
+      {"mesh.element", a.mesh.element == b.mesh.element},
       {"mesh.contact_nodes", a.mesh.contact_nodes == b.mesh.contact_nodes},
       {"mesh.contact_half_width", a.mesh.contact_half_width == b.mesh.contact_half_width},
       {"mesh.fine_width", a.mesh.fine_width == b.mesh.fine_width},

@@ -136,5 +136,10 @@ CholmodSolver::~CholmodSolver() = default;
 
 long CholmodSolver::numeric_factorizations() const { return state_->numeric_factorizations; }
 long CholmodSolver::symbolic_analyses() const { return state_->symbolic_analyses; }
+double CholmodSolver::condition_estimate() const {
+  if (!state_->factor) return 0.0;
+  const double rcond = cholmod_l_rcond(state_->factor, &state_->common);
+  return rcond > 0.0 ? 1.0 / rcond : 0.0;
+}
 
 }  // namespace indentsim

@@ -26,6 +26,8 @@ public:
   SUNLinearSolver get() const { return shell_.get(); }
   long numeric_factorizations() const;
   long symbolic_analyses() const;
+  /// 1 / rcond of the last factor (CHOLMOD's cheap estimate from the diagonal of L).
+  double condition_estimate() const;
 
   struct State;  // CHOLMOD's common block, matrix, factor and workspace
 

@@ -62,7 +62,7 @@ const std::vector<SectionSpec>& schema() {
       {"mesh",
        false,
        {{"contact_nodes", false}, {"contact_half_width", false}, {"fine_width", false},
-        {"fine_depth", false}, {"growth", false}}},
+        {"fine_depth", false}, {"growth", false}, {"element", false}}},
       {"output",
        false,
        {{"dir", false}, {"fields_every", false}, {"profile_depths", false}, {"checkpoint_every", false}}},
@@ -274,6 +274,12 @@ LoadCase from_table(const toml::table& root, const std::string& source) {
   }
 
   r.read_integer("mesh", "contact_nodes", lc.mesh.contact_nodes);
+  std::string element = "auto";
+  r.read_string("mesh", "element", element);
+  if (element == "auto") lc.mesh.element = ElementChoice::automatic;
+  else if (element == "q1") lc.mesh.element = ElementChoice::q1;
+  else if (element == "bbar") lc.mesh.element = ElementChoice::bbar;
+  else r.fail("mesh.element", fmt::format("\"{}\" is not an element (auto, q1, bbar)", element));
   r.read_optional_number("mesh", "contact_half_width", lc.mesh.contact_half_width);
   r.read_optional_number("mesh", "fine_width", lc.mesh.fine_width);
   r.read_optional_number("mesh", "fine_depth", lc.mesh.fine_depth);
@@ -400,7 +406,10 @@ std::string to_toml(const LoadCase& lc) {
     increments += "]";
   }
   t += fmt::format("[load]\npath = {}\nincrements = {}\n\n", numbers(lc.load.path), increments);
-  t += fmt::format("[mesh]\ncontact_nodes = {}\n", lc.mesh.contact_nodes);
+  const char* element = lc.mesh.element == ElementChoice::q1     ? "q1"
+                        : lc.mesh.element == ElementChoice::bbar ? "bbar"
+                                                                 : "auto";
+  t += fmt::format("[mesh]\nelement = \"{}\"\ncontact_nodes = {}\n", element, lc.mesh.contact_nodes);
   if (lc.mesh.contact_half_width) t += fmt::format("contact_half_width = {:.17g}\n", *lc.mesh.contact_half_width);
   if (lc.mesh.fine_width) t += fmt::format("fine_width = {:.17g}\n", *lc.mesh.fine_width);
   if (lc.mesh.fine_depth) t += fmt::format("fine_depth = {:.17g}\n", *lc.mesh.fine_depth);

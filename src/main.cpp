@@ -163,7 +163,11 @@ int drive(Simulation& sim, RunOutput& output, const std::string& label, bool qui
   progress.finish();
   output.finish(sim);
   show_warnings();
-  if (!quiet) fmt::print("P-alpha curve: {}\n", output.curve_path().string());
+  if (!quiet) {
+    fmt::print("largest condition estimate of a Newton matrix: {:.3g} ({})\n", sim.largest_condition_estimate(),
+               sim.linear_solver() == LinearSolverKind::cholmod ? "CHOLMOD 1/rcond" : "KLU condest");
+    fmt::print("P-alpha curve: {}\n", output.curve_path().string());
+  }
   return exit_code;
 }
 

@@ -136,7 +136,7 @@ ElementVector InelasticBulk::element_force(int ei, int ej, const std::array<Voig
   const auto& points = gauss_points_2x2();
   ElementVector fe = ElementVector::Zero();
   for (std::size_t g = 0; g < points.size(); ++g) {
-    const StrainDisplacement b = strain_displacement(rect, points[g].xi, points[g].eta);
+    const StrainDisplacement b = strain_displacement(rect, points[g].xi, points[g].eta, mesh_.element_kind());
     fe.noalias() += (points[g].weight * rect.width * rect.height) * b.transpose() * law_->respond(first + g, strains[g]).stress;
   }
   return fe;
@@ -168,7 +168,8 @@ void InelasticBulk::tangent(const double* u, double* values) {
       const std::size_t first = 4 * static_cast<std::size_t>(mesh_.element(ei, ej));
       std::array<PlaneStrainMatrix, 4> d;
       for (std::size_t g = 0; g < 4; ++g) d[g] = law_->respond(first + g, strains[g]).tangent;
-      const ElementMatrix correction = gauss_stiffness(mesh_.rectangle(ei, ej), d) - elastic_.cached_matrix(ei, ej);
+      const ElementMatrix correction =
+          gauss_stiffness(mesh_.rectangle(ei, ej), d, mesh_.element_kind()) - elastic_.cached_matrix(ei, ej);
       const std::int32_t* pos = pattern_.element_positions(mesh_.element(ei, ej));
       for (int a = 0; a < 8; ++a)
         for (int b = 0; b < 8; ++b)

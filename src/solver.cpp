@@ -27,17 +27,30 @@ void ContactEquations::residual(const double* u, double alpha, double* f) {
     f[c.equation] = ContactBoundary::complementarity(c, f[c.equation], u[c.equation], alpha);
 }
 
+bool ActiveSetHistory::record(std::uint64_t signature, double residual) {
+  bool cycle = false;
+  if (!seen_.empty() && seen_.back().first != signature)
+    for (std::size_t k = 0; k + 1 < seen_.size(); ++k)
+      if (seen_[k].first == signature && residual > 0.1 * seen_[k].second) cycle = true;
+  seen_.emplace_back(signature, residual);
+  return cycle;
+}
+
 void ContactEquations::jacobian(const double* u, double alpha, double* values) {
   bulk_->tangent(u, values);
   bulk_->internal_force(u, internal_force_.data());
   const auto& cs = contact_.candidates();
+  std::uint64_t signature = 0xcbf29ce484222325ull;  // FNV-1a over the active flags
   for (std::size_t i = 0; i < cs.size(); ++i) {
     const auto& c = cs[i];
-    if (!ContactBoundary::active(c, internal_force_[c.equation], u[c.equation], alpha)) continue;
+    const bool active = ContactBoundary::active(c, internal_force_[c.equation], u[c.equation], alpha);
+    signature = (signature ^ (active ? 1u : 2u)) * 0x100000001b3ull;
+    if (!active) continue;
     // Active node: the row of c (v + alpha - g) is c e_k.
     for (std::int64_t p : contact_rows_[i]) values[p] = 0.0;
     values[pattern_.diagonal_position(c.equation)] = c.scale;
   }
+  signature_ = signature;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -59,6 +72,7 @@ struct KluWithReuse {
   long numeric_factorizations = 0;
   long symbolic_analyses = 0;
   bool fresh_numeric = false;  // the next setup factors afresh (new pivots), keeping the analysis
+  double condition_estimate = 0.0;  // of the increment's first (fresh) factorization
 
   static KluWithReuse* self(SUNLinearSolver s) { return static_cast<KluWithReuse*>(s->content); }
   static SUNLinearSolverContent_KLU klu_content(SUNLinearSolver klu) {
@@ -89,6 +103,10 @@ struct KluWithReuse {
       content->numeric = sun_klu_factor(SUNSparseMatrix_IndexPointers(a), SUNSparseMatrix_IndexValues(a),
                                         SUNSparseMatrix_Data(a), content->symbolic, &content->common);
       content->last_flag = content->numeric ? SUNLS_SUCCESS : SUNLS_PACKAGE_FAIL_REC;
+      if (content->numeric &&
+          sun_klu_condest(SUNSparseMatrix_IndexPointers(a), SUNSparseMatrix_Data(a), content->symbolic,
+                          content->numeric, &content->common))
+        me->condition_estimate = content->common.condest;
       return content->last_flag;
     }
     const bool analyse = content->first_factorize != 0;
@@ -131,6 +149,8 @@ struct NewtonSolver::Impl {
   double alpha = 0.0;
   std::string last_message;
   std::vector<double> residual_history;
+  ActiveSetHistory active_sets;
+  bool cycling = false;
 
   Impl(IncrementEquations& eq, const NewtonSettings& s)
       : equations(eq),
@@ -194,7 +214,7 @@ struct NewtonSolver::Impl {
     return 0;
   }
 
-  static int jacobian_callback(N_Vector u, N_Vector, SUNMatrix j, void* data, N_Vector, N_Vector) {
+  static int jacobian_callback(N_Vector u, N_Vector fu, SUNMatrix j, void* data, N_Vector, N_Vector) {
     auto* me = static_cast<Impl*>(data);
     // KINSOL zeroes the whole matrix, index arrays included, before each call (STACK.md):
     // write the fixed pattern back every time.
@@ -202,6 +222,15 @@ struct NewtonSolver::Impl {
     std::copy(pattern.column_start().begin(), pattern.column_start().end(), SUNSparseMatrix_IndexPointers(j));
     std::copy(pattern.row_index().begin(), pattern.row_index().end(), SUNSparseMatrix_IndexValues(j));
     me->equations.jacobian(N_VGetArrayPointer(u), me->alpha, SUNSparseMatrix_Data(j));
+    // A cycling active set stops this attempt (recoverable): the caller damps it with a line
+    // search, then cuts the increment back.
+    const double* f = N_VGetArrayPointer(fu);
+    double norm = 0.0;
+    for (sunindextype i = 0; i < N_VGetLength(fu); ++i) norm = std::max(norm, std::abs(f[i]));
+    if (me->active_sets.record(me->equations.active_set_signature(), norm)) {
+      me->cycling = true;
+      return 1;
+    }
     return 0;
   }
 
@@ -233,6 +262,8 @@ NewtonReport NewtonSolver::solve(double alpha, std::vector<double>& u, Globaliza
   m.residual_history.clear();
   double* data = N_VGetArrayPointer(m.u.get());
   std::copy(u.begin(), u.end(), data);
+  m.active_sets.clear();
+  m.cycling = false;
   const long factorizations_before = total_factorizations();
   const long analyses_before = total_symbolic_analyses();
 
@@ -245,10 +276,11 @@ NewtonReport NewtonSolver::solve(double alpha, std::vector<double>& u, Globaliza
   report.factorizations = total_factorizations() - factorizations_before;
   report.symbolic_analyses = total_symbolic_analyses() - analyses_before;
   report.residual = m.scaled_residual(data);
+  report.condition_estimate = m.cholmod ? m.cholmod->condition_estimate() : m.klu.condition_estimate;
   // Trust the residual, not the return code alone: KIN_STEP_LT_STPTOL and friends are not
   // convergence, and a success must really satisfy the tolerance.
   report.converged = report.kinsol_flag >= 0 && report.residual <= m.settings.tolerance;
-  report.message = m.last_message;
+  report.message = m.cycling ? "active-set cycling between contact sets detected" : m.last_message;
   report.residual_history = m.residual_history;
   std::copy(data, data + u.size(), u.begin());
   return report;

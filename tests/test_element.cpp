@@ -52,3 +52,30 @@ TEST(Element, PaperTypoInA22IsNotReproduced) {
   EXPECT_DOUBLE_EQ(k(v_index(4), v_index(4)), expected);
   EXPECT_DOUBLE_EQ(k(v_index(4), v_index(4)), k(v_index(1), v_index(1)));
 }
+
+TEST(Element, BbarIsSymmetricKeepsRigidBodyModesAndAgreesOnUniformDilatation) {
+  const Rectangle rect{3e-4, 1e-4};
+  const ElasticMaterial material{210e9, 0.4999};
+  const ElementMatrix k = gauss_stiffness(rect, material.stiffness(), ElementKind::bbar);
+  const double scale = k.cwiseAbs().maxCoeff();
+  EXPECT_LE((k - k.transpose()).cwiseAbs().maxCoeff(), 1e-13 * scale);
+  const double xs[4] = {0, 0, rect.width, rect.width}, ys[4] = {0, rect.height, 0, rect.height};
+  ElementVector tx = ElementVector::Zero(), ty = ElementVector::Zero(), rotation, stretch;
+  for (int q = 0; q < 4; ++q) {
+    tx[u_index(q + 1)] = 1.0;
+    ty[v_index(q + 1)] = 1.0;
+    rotation[u_index(q + 1)] = -ys[q];
+    rotation[v_index(q + 1)] = xs[q];
+    stretch[u_index(q + 1)] = 0.7 * xs[q];  // a uniform strain field
+    stretch[v_index(q + 1)] = -0.2 * ys[q] + 0.1 * xs[q];
+  }
+  EXPECT_LE((k * tx).cwiseAbs().maxCoeff(), 1e-12 * scale);
+  EXPECT_LE((k * ty).cwiseAbs().maxCoeff(), 1e-12 * scale);
+  EXPECT_LE((k * rotation).cwiseAbs().maxCoeff(), 1e-12 * scale * rect.width);
+  // For a uniform strain the dilatation equals its mean: B-bar and B give the same strain.
+  for (const auto& p : gauss_points_2x2()) {
+    const VoigtVector plain = strain_displacement(rect, p.xi, p.eta) * stretch;
+    const VoigtVector bar = strain_displacement(rect, p.xi, p.eta, ElementKind::bbar) * stretch;
+    EXPECT_LE((plain - bar).norm(), 1e-14 * plain.norm());
+  }
+}

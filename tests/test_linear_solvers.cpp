@@ -52,3 +52,16 @@ TEST(LinearSolvers, AutoPicksCholmodForLargeMeshesOnly) {
   EXPECT_GT(small.contact().force, 0.0);
   EXPECT_GT(large.contact().force, 0.0);
 }
+
+TEST(ActiveSetCycling, ReturningToAnEarlierSetWithoutProgressIsACycle) {
+  ActiveSetHistory h;
+  EXPECT_FALSE(h.record(1, 1.0));
+  EXPECT_FALSE(h.record(2, 0.5));
+  EXPECT_FALSE(h.record(2, 0.1));  // staying on a set: converging
+  EXPECT_FALSE(h.record(3, 0.4));
+  EXPECT_TRUE(h.record(2, 0.45));  // back to set 2 with no real progress: 2, 3, 2
+  h.clear();
+  EXPECT_FALSE(h.record(1, 1.0));
+  EXPECT_FALSE(h.record(2, 0.5));
+  EXPECT_FALSE(h.record(1, 0.01));  // a node flipped back, but the residual fell 100x: progress
+}

@@ -34,16 +34,19 @@ private:
 
 }  // namespace
 
-TEST(PatchTest, UniformCompressionIsReproducedExactlyOnAGradedMesh) {
+class PatchTest : public ::testing::TestWithParam<ElementKind> {};
+
+TEST_P(PatchTest, UniformCompressionIsReproducedExactlyOnAGradedMesh) {
   // u1 = 0, u2 = -eps (y + ly): satisfies the base clamp and the axis symmetry condition.
   // Stresses: sigma22 = -(lambda + 2 mu) eps on top, sigma11 = -lambda eps on the side x = lx.
   const double lx = 15e-3, ly = 10e-3, eps = 1e-3;
-  const Mesh mesh(graded_axis(lx, 2e-3, 2.5e-4, 1.3), [&] {
+  Mesh mesh(graded_axis(lx, 2e-3, 2.5e-4, 1.3), [&] {
     auto d = graded_axis(ly, 1e-3, 2e-4, 1.25);
     std::vector<double> y(d.size());
     for (std::size_t k = 0; k < d.size(); ++k) y[k] = -d[d.size() - 1 - k];
     return y;
   }());
+  mesh.set_element_kind(GetParam());
   const ElasticMaterial material{210e9, 0.3};
   const LameConstants lame = material.lame();
   const StiffnessPattern pattern(mesh);
@@ -90,3 +93,5 @@ TEST(PatchTest, UniformCompressionIsReproducedExactlyOnAGradedMesh) {
     }
   EXPECT_LE(worst, 1e-12 * eps * ly);
 }
+
+INSTANTIATE_TEST_SUITE_P(Elements, PatchTest, ::testing::Values(ElementKind::q1, ElementKind::bbar));

@@ -23,6 +23,13 @@ struct Rectangle {
   double height = 0.0;  ///< tau (y extent)
 };
 
+/// The element formulation.  `q1`: the paper's element, fully integrated (exact stiffness).
+/// `bbar`: mean dilatation (Hughes' B-bar) -- the in-plane dilatation eps11 + eps22 at each Gauss
+/// point is replaced by its element mean, eps_bar = eps + (theta_mean - theta)/2 (1, 1, 0); with
+/// eps33 = 0 this is the volumetric constraint that locks Q1 when nu -> 1/2 or under isochoric
+/// plastic flow, relaxed to one constraint per element.
+enum class ElementKind { q1, bbar };
+
 /// Local index of the u / v unknown of vertex q (1-based as in the paper).
 constexpr int u_index(int vertex) { return vertex - 1; }
 constexpr int v_index(int vertex) { return vertex + 3; }
@@ -38,12 +45,14 @@ struct GaussPoint {
 };
 const std::array<GaussPoint, 4>& gauss_points_2x2();
 
-/// B at a point (xi, eta) of the rectangle.
-StrainDisplacement strain_displacement(const Rectangle& rect, double xi, double eta);
+/// B at a point (xi, eta) of the rectangle (B-bar for ElementKind::bbar).
+StrainDisplacement strain_displacement(const Rectangle& rect, double xi, double eta,
+                                       ElementKind kind = ElementKind::q1);
 
 /// Stiffness by 2x2 Gauss quadrature with one constitutive matrix per Gauss point
 /// (exact for bilinear shape functions on a rectangle with constant D).
-ElementMatrix gauss_stiffness(const Rectangle& rect, const std::array<PlaneStrainMatrix, 4>& d);
-ElementMatrix gauss_stiffness(const Rectangle& rect, const PlaneStrainMatrix& d);
+ElementMatrix gauss_stiffness(const Rectangle& rect, const std::array<PlaneStrainMatrix, 4>& d,
+                              ElementKind kind = ElementKind::q1);
+ElementMatrix gauss_stiffness(const Rectangle& rect, const PlaneStrainMatrix& d, ElementKind kind = ElementKind::q1);
 
 }  // namespace indentsim

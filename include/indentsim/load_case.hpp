@@ -38,7 +38,10 @@ struct LoadInput {
   std::vector<int> segment_increments;
 };
 
+enum class ElementChoice { automatic, q1, bbar };
+
 struct MeshInput {
+  ElementChoice element = ElementChoice::automatic;  ///< "auto" | "q1" | "bbar"
   int contact_nodes = 20;  ///< fine-zone elements across the estimated final contact half-width
   std::optional<double> contact_half_width;  ///< override of the estimate a* [m]
   std::optional<double> fine_width;          ///< override: width of the uniform zone [m]

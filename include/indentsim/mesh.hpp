@@ -84,6 +84,10 @@ public:
   int equation(int dof) const { return equation_[dof]; }
   int equations() const { return equations_; }
 
+  /// The element formulation used on this mesh.
+  ElementKind element_kind() const { return element_kind_; }
+  void set_element_kind(ElementKind kind) { element_kind_ = kind; }
+
   /// Classes of equal element widths / heights: elements of one class pair share a matrix.
   int width_class(int ei) const { return width_class_[ei]; }
   int height_class(int ej) const { return height_class_[ej]; }
@@ -96,6 +100,7 @@ private:
   int equations_ = 0;
   std::vector<int> width_class_, height_class_;
   int width_classes_ = 0, height_classes_ = 0;
+  ElementKind element_kind_ = ElementKind::q1;
 };
 
 }  // namespace indentsim

@@ -75,6 +75,8 @@ public:
   double free_surface_depth() const;
   std::vector<LayerForce> layer_forces() const;
   long symbolic_analyses() const { return newton_->total_symbolic_analyses(); }
+  /// The largest condition estimate of any converged increment's Jacobian so far.
+  double largest_condition_estimate() const { return largest_condition_; }
   /// The sparse direct solver chosen for this run (solver.linear, "auto" resolved).
   LinearSolverKind linear_solver() const { return linear_solver_; }
   /// Warnings raised so far (each once), e.g. a contact zone that left the fine zone.
@@ -107,6 +109,7 @@ private:
   bool warned_fine_zone_ = false;
   NewtonReport last_report_;
   LinearSolverKind linear_solver_ = LinearSolverKind::klu;
+  double largest_condition_ = 0.0;
 };
 
 }  // namespace indentsim

@@ -14,10 +14,27 @@
 
 namespace indentsim {
 
+/// Active-set cycling guard of one Newton solve: the contact sets seen at successive Jacobians,
+/// with the residual norm at each.  Staying on a set is convergence; coming back to a set left
+/// earlier (A, B, A) while the residual has not fallen to a tenth of what it was at the earlier
+/// visit is a cycle, which semi-smooth Newton would repeat forever.  (Coupled with plasticity,
+/// a node may flip back once on the way to convergence; then the residual has dropped.)
+class ActiveSetHistory {
+public:
+  void clear() { seen_.clear(); }
+  /// Records the current active set and residual norm; true if it closes a cycle.
+  bool record(std::uint64_t signature, double residual);
+
+private:
+  std::vector<std::pair<std::uint64_t, double>> seen_;
+};
+
 /// The discrete equations of one increment and their generalized Jacobian.
 class IncrementEquations {
 public:
   virtual ~IncrementEquations() = default;
+  /// A signature of the contact set the last Jacobian used (0 when there is no contact).
+  virtual std::uint64_t active_set_signature() const { return 0; }
   virtual const StiffnessPattern& pattern() const = 0;
   std::int64_t size() const { return pattern().size(); }
   /// F(u; alpha).
@@ -35,6 +52,7 @@ public:
   const StiffnessPattern& pattern() const override { return pattern_; }
   /// Solve with another bulk model on the same pattern (the elastic predictor of a plastic run).
   void use_bulk(BulkModel& bulk) { bulk_ = &bulk; }
+  std::uint64_t active_set_signature() const override { return signature_; }
   void residual(const double* u, double alpha, double* f) override;
   void jacobian(const double* u, double alpha, double* values) override;
 
@@ -44,6 +62,7 @@ private:
   const ContactBoundary& contact_;
   std::vector<std::vector<std::int64_t>> contact_rows_;  // value positions of each candidate's row
   std::vector<double> internal_force_;                    // scratch, sized once
+  std::uint64_t signature_ = 0;
 };
 
 /// The sparse direct solver under KINSOL: SuiteSparse KLU (through SUNLinSol_KLU) or CHOLMOD's
@@ -69,6 +88,9 @@ struct NewtonReport {
   long factorizations = 0;      ///< numeric LU factorizations (KLU factor or refactor)
   long symbolic_analyses = 0;   ///< KLU symbolic analyses (ideally one per mesh)
   double residual = 0.0;        ///< max |F| / force_scale at the returned u
+  /// 1-norm condition estimate of the first Jacobian of the solve (KLU's condest, or 1/rcond of
+  /// CHOLMOD's factor): how much accuracy the factorization may lose.
+  double condition_estimate = 0.0;
   int kinsol_flag = 0;
   std::string message;          ///< KINSOL's own words when it failed
   std::vector<double> residual_history;  ///< max |F| / force_scale at each residual evaluation
