@@ -26,16 +26,33 @@ double LoadCase::max_depth() const {
   return deepest;
 }
 
-std::string to_string(MaterialModel model) {
-  switch (model) {
-    case MaterialModel::elastic: return "elastic";
-    case MaterialModel::ilyushin: return "ilyushin";
-    case MaterialModel::j2: return "j2";
-  }
+namespace {
+
+// The words a load case uses for each choice, shared by the reader and by to_toml().
+template <class E>
+struct Choice {
+  const char* name;
+  E value;
+};
+constexpr Choice<MaterialModel> model_names[] = {
+    {"elastic", MaterialModel::elastic}, {"ilyushin", MaterialModel::ilyushin}, {"j2", MaterialModel::j2}};
+constexpr Choice<HardeningLaw> hardening_names[] = {{"linear", HardeningLaw::linear}, {"power", HardeningLaw::power}};
+constexpr Choice<ElementChoice> element_names[] = {
+    {"auto", ElementChoice::automatic}, {"q1", ElementChoice::q1}, {"bbar", ElementChoice::bbar}};
+constexpr Choice<LinearSolverChoice> linear_names[] = {
+    {"klu", LinearSolverChoice::klu}, {"cholmod", LinearSolverChoice::cholmod}, {"auto", LinearSolverChoice::automatic}};
+
+template <class E, std::size_t N>
+const char* name_of(const Choice<E> (&names)[N], E value) {
+  for (const auto& c : names)
+    if (c.value == value) return c.name;
   return "?";
 }
 
-std::string to_string(HardeningLaw law) { return law == HardeningLaw::linear ? "linear" : "power"; }
+}  // namespace
+
+std::string to_string(MaterialModel model) { return name_of(model_names, model); }
+std::string to_string(HardeningLaw law) { return name_of(hardening_names, law); }
 
 namespace {
 
@@ -163,6 +180,22 @@ public:
     target = *s;
   }
 
+  template <class E, std::size_t N>
+  void read_choice(const std::string& section, const std::string& key, const Choice<E> (&names)[N], E& target) const {
+    std::string word;
+    if (!find(section, key)) return;
+    read_string(section, key, word);
+    std::string known;
+    for (const auto& c : names) {
+      if (word == c.name) {
+        target = c.value;
+        return;
+      }
+      known += (known.empty() ? "" : ", ") + std::string(c.name);
+    }
+    fail(section + "." + key, fmt::format("\"{}\" is not one of: {}", word, known));
+  }
+
   void read_number_array(const std::string& section, const std::string& key,
                          std::vector<double>& target) const {
     const toml::node* node = find(section, key);
@@ -238,20 +271,11 @@ LoadCase from_table(const toml::table& root, const std::string& source) {
   r.read_number("geometry", "ly", lc.geometry.ly);
   r.read_number("punch", "radius", lc.punch.radius);
 
-  std::string model = "elastic";
-  r.read_string("material", "model", model);
-  if (model == "elastic") lc.material.model = MaterialModel::elastic;
-  else if (model == "ilyushin") lc.material.model = MaterialModel::ilyushin;
-  else if (model == "j2") lc.material.model = MaterialModel::j2;
-  else r.fail("material.model", fmt::format("\"{}\" is not a model (elastic, ilyushin, j2)", model));
+  r.read_choice("material", "model", model_names, lc.material.model);
   r.read_number("material", "E", lc.material.E);
   r.read_number("material", "nu", lc.material.nu);
   r.read_number("material", "e0", lc.material.e0);
-  std::string hardening = "linear";
-  r.read_string("material", "hardening", hardening);
-  if (hardening == "linear") lc.material.hardening = HardeningLaw::linear;
-  else if (hardening == "power") lc.material.hardening = HardeningLaw::power;
-  else r.fail("material.hardening", fmt::format("\"{}\" is not a law (linear, power)", hardening));
+  r.read_choice("material", "hardening", hardening_names, lc.material.hardening);
   r.read_number("material", "kappa", lc.material.kappa);
   r.read_number("material", "n", lc.material.n);
 
@@ -274,12 +298,7 @@ LoadCase from_table(const toml::table& root, const std::string& source) {
   }
 
   r.read_integer("mesh", "contact_nodes", lc.mesh.contact_nodes);
-  std::string element = "auto";
-  r.read_string("mesh", "element", element);
-  if (element == "auto") lc.mesh.element = ElementChoice::automatic;
-  else if (element == "q1") lc.mesh.element = ElementChoice::q1;
-  else if (element == "bbar") lc.mesh.element = ElementChoice::bbar;
-  else r.fail("mesh.element", fmt::format("\"{}\" is not an element (auto, q1, bbar)", element));
+  r.read_choice("mesh", "element", element_names, lc.mesh.element);
   r.read_optional_number("mesh", "contact_half_width", lc.mesh.contact_half_width);
   r.read_optional_number("mesh", "fine_width", lc.mesh.fine_width);
   r.read_optional_number("mesh", "fine_depth", lc.mesh.fine_depth);
@@ -291,12 +310,7 @@ LoadCase from_table(const toml::table& root, const std::string& source) {
   r.read_integer("output", "checkpoint_every", lc.output.checkpoint_every);
 
   r.read_number("solver", "tolerance", lc.solver.tolerance);
-  std::string linear = "klu";
-  r.read_string("solver", "linear", linear);
-  if (linear == "auto") lc.solver.linear = LinearSolverChoice::automatic;
-  else if (linear == "klu") lc.solver.linear = LinearSolverChoice::klu;
-  else if (linear == "cholmod") lc.solver.linear = LinearSolverChoice::cholmod;
-  else r.fail("solver.linear", fmt::format("\"{}\" is not a linear solver (auto, klu, cholmod)", linear));
+  r.read_choice("solver", "linear", linear_names, lc.solver.linear);
   r.read_integer("solver", "max_newton", lc.solver.max_newton);
   r.read_integer("solver", "max_cutbacks", lc.solver.max_cutbacks);
   validate(lc);
@@ -406,10 +420,8 @@ std::string to_toml(const LoadCase& lc) {
     increments += "]";
   }
   t += fmt::format("[load]\npath = {}\nincrements = {}\n\n", numbers(lc.load.path), increments);
-  const char* element = lc.mesh.element == ElementChoice::q1     ? "q1"
-                        : lc.mesh.element == ElementChoice::bbar ? "bbar"
-                                                                 : "auto";
-  t += fmt::format("[mesh]\nelement = \"{}\"\ncontact_nodes = {}\n", element, lc.mesh.contact_nodes);
+  t += fmt::format("[mesh]\nelement = \"{}\"\ncontact_nodes = {}\n", name_of(element_names, lc.mesh.element),
+                   lc.mesh.contact_nodes);
   if (lc.mesh.contact_half_width) t += fmt::format("contact_half_width = {:.17g}\n", *lc.mesh.contact_half_width);
   if (lc.mesh.fine_width) t += fmt::format("fine_width = {:.17g}\n", *lc.mesh.fine_width);
   if (lc.mesh.fine_depth) t += fmt::format("fine_depth = {:.17g}\n", *lc.mesh.fine_depth);
@@ -420,11 +432,9 @@ std::string to_toml(const LoadCase& lc) {
   t += fmt::format("\n[output]\n{}\nfields_every = {}\nprofile_depths = {}\ncheckpoint_every = {}\n\n",
                    dir_line.str(), lc.output.fields_every, numbers(lc.output.profile_depths),
                    lc.output.checkpoint_every);
-  const char* linear = lc.solver.linear == LinearSolverChoice::klu       ? "klu"
-                       : lc.solver.linear == LinearSolverChoice::cholmod ? "cholmod"
-                                                                         : "auto";
   t += fmt::format("[solver]\ntolerance = {:.17g}\nmax_newton = {}\nmax_cutbacks = {}\nlinear = \"{}\"\n",
-                   lc.solver.tolerance, lc.solver.max_newton, lc.solver.max_cutbacks, linear);
+                   lc.solver.tolerance, lc.solver.max_newton, lc.solver.max_cutbacks,
+                   name_of(linear_names, lc.solver.linear));
   return t;
 }
 

@@ -21,12 +21,7 @@ using indentsim::testing::shipped_case;
 
 namespace {
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using indentsim::testing::slurp;
 
 // curve.csv without its wall-clock column (the last one).
 std::string curve_without_timing(const fs::path& file) {
@@ -49,17 +44,8 @@ Checkpoint small_checkpoint(const std::string& model) {
   return make_checkpoint(sim, rows, depths);
 }
 
-class CheckpointCli : public ::testing::Test {
+class CheckpointCli : public indentsim::testing::TempDirTest {
 protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("indentsim_ck_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
-            std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
   // Runs the CLI; returns the exit status (128 + signal when killed by one).
   int cli(const std::string& args, const std::string& fault = "") {
     const std::string env = fault.empty() ? "" : "INDENTSIM_FAULT=" + fault + " ";
@@ -70,8 +56,6 @@ protected:
     return WIFSIGNALED(raw) ? 128 + WTERMSIG(raw) : -1;
   }
   std::string err() const { return slurp(dir_ / "err.txt"); }
-
-  fs::path dir_;
 };
 
 const std::string history_case = "loadcases/load_unload.toml";

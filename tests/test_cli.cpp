@@ -20,17 +20,8 @@ struct Outcome {
   std::string out, err;
 };
 
-class Cli : public ::testing::Test {
+class Cli : public indentsim::testing::TempDirTest {
 protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("indentsim_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
-            std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
   Outcome run(const std::string& args) {
     const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
     const std::string command = std::string(INDENTSIM_CLI) + " " + args + " >" + out.string() + " 2>" + err.string();
@@ -41,37 +32,15 @@ protected:
     o.err = slurp(err);
     return o;
   }
-  static std::string slurp(const fs::path& p) {
-    std::ifstream in(p);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-  }
+  static std::string slurp(const fs::path& p) { return indentsim::testing::slurp(p); }
   fs::path write_case(const std::string& name, const std::string& text) {
     const fs::path p = dir_ / name;
     std::ofstream(p) << text;
     return p;
   }
-
-  fs::path dir_;
 };
 
-const std::string good_case = R"(
-[geometry]
-lx = 15e-3
-ly = 10e-3
-[punch]
-radius = 2e-3
-[material]
-model = "elastic"
-E = 210e9
-nu = 0.3
-[load]
-path = [0.0, 2e-5]
-increments = 3
-[mesh]
-contact_nodes = 8
-)";
+const std::string& good_case = indentsim::testing::small_case_toml;
 
 }  // namespace
 

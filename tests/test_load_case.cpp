@@ -10,20 +10,7 @@ using namespace indentsim;
 
 namespace {
 
-const char* valid_case = R"(
-[geometry]
-lx = 15e-3
-ly = 10e-3
-[punch]
-radius = 2e-3
-[material]
-model = "elastic"
-E = 210e9
-nu = 0.3
-[load]
-path = [0.0, 5e-5]
-increments = 10
-)";
+const std::string& valid_case = indentsim::testing::small_case_toml;
 
 // Parses `text` and returns the InputError's key, or "" if it parsed.
 std::string rejected_key(const std::string& text, const std::vector<std::string>& overrides = {}) {
@@ -52,9 +39,10 @@ TEST(LoadCase, ReadsFixedKeysInSIUnits) {
   EXPECT_DOUBLE_EQ(lc.punch.radius, 2e-3);
   EXPECT_EQ(lc.material.model, MaterialModel::elastic);
   EXPECT_DOUBLE_EQ(lc.material.E, 210e9);
-  EXPECT_EQ(lc.load.increments, 10);
-  EXPECT_EQ(lc.mesh.contact_nodes, 20);  // default
-  EXPECT_DOUBLE_EQ(lc.max_depth(), 5e-5);
+  EXPECT_EQ(lc.load.increments, 3);
+  EXPECT_EQ(lc.mesh.contact_nodes, 8);
+  EXPECT_EQ(lc.output.checkpoint_every, 10);  // default
+  EXPECT_DOUBLE_EQ(lc.max_depth(), 2e-5);
 }
 
 TEST(LoadCase, OverridesAreTomlValuesOrBareStrings) {
@@ -76,7 +64,7 @@ TEST(LoadCase, IntegersAreAcceptedWhereNumbersAreExpected) {
 }
 
 TEST(LoadCase, BadInputNamesTheKey) {
-  const std::string v = valid_case;
+  const std::string& v = valid_case;
   EXPECT_EQ(rejected_key(v + "\n[extra]\nx = 1\n"), "extra");                      // unknown section
   EXPECT_EQ(rejected_key(v, {"geometry.lz=1"}), "geometry.lz");                    // unknown key
   EXPECT_EQ(rejected_key(v, {"material.E=\"steel\""}), "material.E");              // wrong type
@@ -101,10 +89,10 @@ TEST(LoadCase, BadInputNamesTheKey) {
 }
 
 TEST(LoadCase, MissingKeysAndSectionsAreNamed) {
-  std::string no_radius = valid_case;
+  std::string no_radius(valid_case);
   no_radius.replace(no_radius.find("radius = 2e-3"), 13, "");
   EXPECT_EQ(rejected_key(no_radius), "punch.radius");
-  std::string no_load = valid_case;
+  std::string no_load(valid_case);
   no_load.erase(no_load.find("[load]"));
   EXPECT_EQ(rejected_key(no_load), "load");
 }

@@ -18,15 +18,16 @@ VoigtVector strain_with_intensity(VoigtVector direction, double e_u) {
   return direction * (e_u / strain_intensity(direction));
 }
 
-// Central differences of the secant stress, column by column.
-PlaneStrainMatrix finite_difference_tangent(const IlyushinLaw& law, const VoigtVector& strain) {
+// Central differences of a stress function, column by column.
+template <class StressOf>
+PlaneStrainMatrix finite_difference_tangent(const StressOf& stress, const VoigtVector& strain) {
   PlaneStrainMatrix fd;
   const double step = 1e-7 * strain.norm();
   for (int j = 0; j < 3; ++j) {
     VoigtVector plus = strain, minus = strain;
     plus[j] += step;
     minus[j] -= step;
-    fd.col(j) = (law.respond(plus).stress - law.respond(minus).stress) / (2 * step);
+    fd.col(j) = (stress(plus) - stress(minus)) / (2 * step);
   }
   return fd;
 }
@@ -41,7 +42,8 @@ void expect_tangent_matches(const IlyushinLaw& law, double e0) {
           strain_with_intensity(VoigtVector(component(rng), component(rng), component(rng)), factor * e0);
       const SecantResponse r = law.respond(strain);
       EXPECT_EQ(r.plastic, factor > 1.0);
-      const PlaneStrainMatrix fd = finite_difference_tangent(law, strain);
+      const PlaneStrainMatrix fd =
+          finite_difference_tangent([&](const VoigtVector& e) { return law.respond(e).stress; }, strain);
       const double scale = r.tangent.cwiseAbs().maxCoeff();
       EXPECT_LE((r.tangent - fd).cwiseAbs().maxCoeff(), 1e-6 * scale)
           << "e_u / e0 = " << factor << "\ntangent\n" << r.tangent << "\nfinite differences\n" << fd;
@@ -146,14 +148,8 @@ TEST(J2, ReturnMappingTangentMatchesFiniteDifferences) {
             first + strain_with_intensity(VoigtVector(component(rng), component(rng), component(rng)),
                                           size * curve.elastic_limit());
         const J2Response r = j2.respond(strain, old);
-        PlaneStrainMatrix fd;
-        const double h = 1e-7 * strain.norm();
-        for (int j = 0; j < 3; ++j) {
-          VoigtVector plus = strain, minus = strain;
-          plus[j] += h;
-          minus[j] -= h;
-          fd.col(j) = (j2.respond(plus, old).stress - j2.respond(minus, old).stress) / (2 * h);
-        }
+        const PlaneStrainMatrix fd =
+            finite_difference_tangent([&](const VoigtVector& e) { return j2.respond(e, old).stress; }, strain);
         const double scale = r.tangent.cwiseAbs().maxCoeff();
         EXPECT_LE((r.tangent - fd).cwiseAbs().maxCoeff(), 1e-6 * scale)
             << "plastic " << r.plastic << "\n" << r.tangent << "\n" << fd;

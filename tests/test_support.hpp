@@ -1,11 +1,57 @@
 #pragma once
 // Helpers shared by the tests: load cases from the repository, and small edits of them.
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
+
+#include <gtest/gtest.h>
 
 #include "indentsim/load_case.hpp"
 
 namespace indentsim::testing {
+
+/// A small valid load case (the paper's block, elastic) for tests that edit one key.
+inline const std::string small_case_toml = R"(
+[geometry]
+lx = 15e-3
+ly = 10e-3
+[punch]
+radius = 2e-3
+[material]
+model = "elastic"
+E = 210e9
+nu = 0.3
+[load]
+path = [0.0, 2e-5]
+increments = 3
+[mesh]
+contact_nodes = 8
+)";
+
+/// A fresh folder per test, removed afterwards.
+class TempDirTest : public ::testing::Test {
+protected:
+  void SetUp() override {
+    dir_ = std::filesystem::temp_directory_path() /
+           ("indentsim_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+            std::to_string(::getpid()));
+    std::filesystem::remove_all(dir_);
+    std::filesystem::create_directories(dir_);
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+  std::filesystem::path dir_;
+};
+
+inline std::string slurp(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
 
 inline std::string source_path(const std::string& relative) { return std::string(INDENTSIM_SOURCE_DIR) + "/" + relative; }
 
