@@ -40,8 +40,8 @@ void CurveWriter::write(const IncrementRecord& record) {
 void LoadHistorySummary::add(const IncrementRecord& r, double free_surface_depth) {
   if (r.force > peak_force_) peak_force_ = r.force;
   peak_depth_ = std::max(peak_depth_, r.alpha);
-  if (!history_.empty()) {
-    const IncrementRecord& previous = history_.back();
+  if (previous_) {
+    const IncrementRecord& previous = *previous_;
     const bool down = r.alpha < previous.alpha;
     if (down && !unloading_ && previous.force > 0.0) {
       // A reversal at `previous`: the first unloading increment's secant is S; the last loading
@@ -51,8 +51,8 @@ void LoadHistorySummary::add(const IncrementRecord& r, double free_surface_depth
       u.depth = previous.alpha;
       u.force = previous.force;
       u.stiffness = (previous.force - r.force) / (previous.alpha - r.alpha);
-      if (history_.size() >= 2) {
-        const IncrementRecord& before = history_[history_.size() - 2];
+      if (before_previous_) {
+        const IncrementRecord& before = *before_previous_;
         if (before.alpha != previous.alpha)
           u.loading_stiffness = (previous.force - before.force) / (previous.alpha - before.alpha);
       }
@@ -67,13 +67,14 @@ void LoadHistorySummary::add(const IncrementRecord& r, double free_surface_depth
       unloadings_.back().separation_step = r.step;
     }
   }
-  history_.push_back(r);
+  before_previous_ = previous_;
+  previous_ = r;
 }
 
 std::string LoadHistorySummary::json(const std::string& model) const {
   std::string out = fmt::format("{{\n  \"model\": \"{}\",\n  \"increments\": {},\n  \"peak_depth\": {:.17g},\n"
                                 "  \"peak_force\": {:.17g},\n  \"unloading\": [",
-                                model, history_.empty() ? 0 : history_.back().step, peak_depth_, peak_force_);
+                                model, previous_ ? previous_->step : 0, peak_depth_, peak_force_);
   for (std::size_t i = 0; i < unloadings_.size(); ++i) {
     const Unloading& u = unloadings_[i];
     out += fmt::format("{}\n    {{\"step\": {}, \"depth\": {:.17g}, \"force\": {:.17g}, \"stiffness\": {:.17g}, "

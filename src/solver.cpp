@@ -23,8 +23,15 @@ ContactEquations::ContactEquations(const StiffnessPattern& pattern, BulkModel& b
 
 void ContactEquations::residual(const double* u, double alpha, double* f) {
   bulk_->internal_force(u, f);
-  for (const auto& c : contact_.candidates())
+  const auto& cs = contact_.candidates();
+  residual_u_.assign(u, u + pattern_.size());
+  residual_contact_force_.resize(cs.size());
+  residual_bulk_ = bulk_;
+  for (std::size_t i = 0; i < cs.size(); ++i) {
+    const auto& c = cs[i];
+    residual_contact_force_[i] = f[c.equation];
     f[c.equation] = ContactBoundary::complementarity(c, f[c.equation], u[c.equation], alpha);
+  }
 }
 
 bool ActiveSetHistory::record(std::uint64_t signature, double residual) {
@@ -38,12 +45,18 @@ bool ActiveSetHistory::record(std::uint64_t signature, double residual) {
 
 void ContactEquations::jacobian(const double* u, double alpha, double* values) {
   bulk_->tangent(u, values);
-  bulk_->internal_force(u, internal_force_.data());
   const auto& cs = contact_.candidates();
+  const bool cached = residual_bulk_ == bulk_ && residual_u_.size() == static_cast<std::size_t>(pattern_.size()) &&
+                      std::equal(residual_u_.begin(), residual_u_.end(), u);
+  if (!cached) {
+    bulk_->internal_force(u, internal_force_.data());
+    residual_contact_force_.resize(cs.size());
+    for (std::size_t i = 0; i < cs.size(); ++i) residual_contact_force_[i] = internal_force_[cs[i].equation];
+  }
   std::uint64_t signature = 0xcbf29ce484222325ull;  // FNV-1a over the active flags
   for (std::size_t i = 0; i < cs.size(); ++i) {
     const auto& c = cs[i];
-    const bool active = ContactBoundary::active(c, internal_force_[c.equation], u[c.equation], alpha);
+    const bool active = ContactBoundary::active(c, residual_contact_force_[i], u[c.equation], alpha);
     signature = (signature ^ (active ? 1u : 2u)) * 0x100000001b3ull;
     if (!active) continue;
     // Active node: the row of c (v + alpha - g) is c e_k.

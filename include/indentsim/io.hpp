@@ -5,6 +5,7 @@
 #include <string>
 
 #include <memory>
+#include <optional>
 
 #include "indentsim/fields.hpp"
 #include "indentsim/load_stepping.hpp"
@@ -53,7 +54,7 @@ public:
   double peak_force() const { return peak_force_; }
 
 private:
-  std::vector<IncrementRecord> history_;
+  std::optional<IncrementRecord> previous_, before_previous_;  // the last two rows fed
   std::vector<Unloading> unloadings_;
   double peak_depth_ = 0.0, peak_force_ = 0.0;
   bool unloading_ = false;

@@ -62,6 +62,11 @@ private:
   const ContactBoundary& contact_;
   std::vector<std::vector<std::int64_t>> contact_rows_;  // value positions of each candidate's row
   std::vector<double> internal_force_;                    // scratch, sized once
+  // The contact rows' internal forces of the last residual evaluation, and where it was taken:
+  // KINSOL evaluates F(u) before J(u) at the same u, so the Jacobian reuses them instead of a
+  // second pass over the elements.
+  std::vector<double> residual_u_, residual_contact_force_;
+  const BulkModel* residual_bulk_ = nullptr;
   std::uint64_t signature_ = 0;
 };
 
