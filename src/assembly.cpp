@@ -61,6 +61,22 @@ StiffnessPattern::StiffnessPattern(const Mesh& mesh) : size_(mesh.equations()) {
     }
 }
 
+StiffnessPattern::StiffnessPattern(std::vector<std::int64_t> column_start, std::vector<std::int64_t> row_index)
+    : size_(static_cast<std::int64_t>(column_start.size()) - 1),
+      column_start_(std::move(column_start)),
+      row_index_(std::move(row_index)) {
+  if (size_ < 0 || column_start_.back() != static_cast<std::int64_t>(row_index_.size()))
+    throw std::invalid_argument("inconsistent compressed-column pattern");
+  diagonal_.assign(static_cast<std::size_t>(size_), -1);
+  for (std::int64_t c = 0; c < size_; ++c) {
+    const auto first = row_index_.begin() + column_start_[c];
+    const auto last = row_index_.begin() + column_start_[c + 1];
+    const auto d = std::lower_bound(first, last, c);
+    if (d == last || *d != c) throw std::invalid_argument("compressed-column pattern without its diagonal");
+    diagonal_[c] = d - row_index_.begin();
+  }
+}
+
 std::vector<std::int64_t> StiffnessPattern::row_positions(int equation) const {
   std::vector<std::int64_t> positions;
   // Symmetric pattern: the columns holding row `equation` are the rows of column `equation`.
@@ -155,8 +171,11 @@ std::array<GaussPointState, 4> ElasticStiffness::gauss_point_states(int ei, int 
 }
 
 std::array<VoigtVector, 4> gauss_point_strains(const Mesh& mesh, int ei, int ej, const double* u) {
+  return gauss_point_strains(mesh, ei, ej, gather(mesh, ei, ej, u));
+}
+
+std::array<VoigtVector, 4> gauss_point_strains(const Mesh& mesh, int ei, int ej, const ElementVector& ue) {
   const Rectangle rect = mesh.rectangle(ei, ej);
-  const ElementVector ue = gather(mesh, ei, ej, u);
   const auto& points = gauss_points_2x2();
   std::array<VoigtVector, 4> strains;
   for (std::size_t g = 0; g < points.size(); ++g)

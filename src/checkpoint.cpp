@@ -195,6 +195,10 @@ std::string serialize(const Checkpoint& c) {
   payload.put_vector(s.u_previous);
   payload.put_vector(s.history);
   payload.put_vector(s.in_contact);
+  payload.put<std::uint8_t>(s.near_field.condensed);
+  payload.put<std::int32_t>(s.near_field.contact_nodes);
+  payload.put<std::int32_t>(s.near_field.elements_x);
+  payload.put<std::int32_t>(s.near_field.elements_y);
   payload.put<std::uint64_t>(c.curve.size());
   for (const auto& r : c.curve) write_record(payload, r);
   payload.put_vector(c.free_surface_depths);
@@ -251,6 +255,10 @@ Checkpoint deserialize(const std::string& bytes, const std::string& source) {
   s.u_previous = in.get_vector<double>("the previous displacement");
   s.history = in.get_vector<double>("the material history");
   s.in_contact = in.get_vector<char>("the contact set");
+  s.near_field.condensed = in.get<std::uint8_t>("the near field") != 0;
+  s.near_field.contact_nodes = in.get<std::int32_t>("the near field");
+  s.near_field.elements_x = in.get<std::int32_t>("the near field");
+  s.near_field.elements_y = in.get<std::int32_t>("the near field");
   const auto rows = in.get<std::uint64_t>("the curve");
   if (rows > in.left()) in.fail("claims more curve rows than the file holds");
   for (std::uint64_t k = 0; k < rows; ++k) c.curve.push_back(read_record(in));
@@ -381,11 +389,14 @@ ResumedRun resume_from(const Checkpoint& c, const std::string& source, const std
                                  "{:.6g} m): keep the path's waypoints and increments up to there",
                                  done - 1, before[done - 1]));
   if (!(c.planned_contact_half_width > 0.0)) fail("holds no valid mesh plan");
-  run.simulation = std::make_unique<Simulation>(run.load_case, c.planned_contact_half_width);
+  // The run continues on the near field it had (bit for bit), unless --set asks for the whole mesh.
+  SimulationState state = c.state;
+  if (run.load_case.solver.far_field == FarFieldChoice::full) state.near_field = NearField{};
+  run.simulation = std::make_unique<Simulation>(run.load_case, c.planned_contact_half_width, state.near_field);
   if (run.simulation->mesh().x() != c.mesh_x || run.simulation->mesh().y() != c.mesh_y)
     fail("its mesh does not match the mesh its load case gives (written by another version of indentsim?)");
   try {
-    run.simulation->restore(c.state);
+    run.simulation->restore(state);
   } catch (const std::invalid_argument& e) {
     fail(std::string("its state does not fit its load case: ") + e.what());
   }

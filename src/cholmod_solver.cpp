@@ -20,6 +20,7 @@ struct CholmodSolver::State {
   std::vector<sunindextype> column_start, row_index;
   long numeric_factorizations = 0, symbolic_analyses = 0;
   int last_flag = 0;
+  bool keep_factor = false;
 
   State() {
     cholmod_l_start(&common);
@@ -51,6 +52,11 @@ int setup(SUNLinearSolver s, SUNMatrix a) {
   const double* values = SUNSparseMatrix_Data(a);
   const auto nnz = static_cast<std::size_t>(colptr[n]);
 
+  if (c.keep_factor && c.factor && c.numeric_factorizations > 0) {
+    c.keep_factor = false;
+    return c.last_flag = SUNLS_SUCCESS;
+  }
+  c.keep_factor = false;
   if (!c.matrix) {  // first setup: the pattern, the dense right-hand side, the symbolic analysis
     c.matrix = cholmod_l_allocate_sparse(n, n, nnz, /*sorted*/ 1, /*packed*/ 1, /*stype*/ -1, CHOLMOD_REAL, &c.common);
     c.rhs = cholmod_l_allocate_dense(n, 1, n, CHOLMOD_REAL, &c.common);
@@ -135,6 +141,7 @@ CholmodSolver::CholmodSolver(SUNContext context) : state_(std::make_unique<State
 CholmodSolver::~CholmodSolver() = default;
 
 long CholmodSolver::numeric_factorizations() const { return state_->numeric_factorizations; }
+void CholmodSolver::keep_factor_once() { state_->keep_factor = true; }
 long CholmodSolver::symbolic_analyses() const { return state_->symbolic_analyses; }
 double CholmodSolver::condition_estimate() const {
   if (!state_->factor) return 0.0;

@@ -25,6 +25,8 @@ public:
   /// The SUNDIALS face of the solver (owned by this object) to hand to KINSetLinearSolver.
   SUNLinearSolver get() const { return shell_.get(); }
   long numeric_factorizations() const;
+  /// The next setup keeps the current factor instead of factoring its matrix (a chord step).
+  void keep_factor_once();
   long symbolic_analyses() const;
   /// 1 / rcond of the last factor (CHOLMOD's cheap estimate from the diagonal of L).
   double condition_estimate() const;

@@ -41,6 +41,9 @@ constexpr Choice<ElementChoice> element_names[] = {
     {"auto", ElementChoice::automatic}, {"q1", ElementChoice::q1}, {"bbar", ElementChoice::bbar}};
 constexpr Choice<LinearSolverChoice> linear_names[] = {
     {"klu", LinearSolverChoice::klu}, {"cholmod", LinearSolverChoice::cholmod}, {"auto", LinearSolverChoice::automatic}};
+constexpr Choice<JacobianChoice> jacobian_names[] = {{"reuse", JacobianChoice::reuse}, {"fresh", JacobianChoice::fresh}};
+constexpr Choice<FarFieldChoice> far_field_names[] = {
+    {"auto", FarFieldChoice::automatic}, {"condense", FarFieldChoice::condense}, {"full", FarFieldChoice::full}};
 
 template <class E, std::size_t N>
 const char* name_of(const Choice<E> (&names)[N], E value) {
@@ -83,7 +86,8 @@ const std::vector<SectionSpec>& schema() {
       {"output",
        false,
        {{"dir", false}, {"fields_every", false}, {"profile_depths", false}, {"checkpoint_every", false}}},
-      {"solver", false, {{"tolerance", false}, {"max_newton", false}, {"max_cutbacks", false}, {"linear", false}}},
+      {"solver", false, {{"tolerance", false}, {"max_newton", false}, {"max_cutbacks", false}, {"linear", false},
+                              {"far_field", false}, {"jacobian", false}}},
   };
   return sections;
 }
@@ -311,6 +315,8 @@ LoadCase from_table(const toml::table& root, const std::string& source) {
 
   r.read_number("solver", "tolerance", lc.solver.tolerance);
   r.read_choice("solver", "linear", linear_names, lc.solver.linear);
+  r.read_choice("solver", "far_field", far_field_names, lc.solver.far_field);
+  r.read_choice("solver", "jacobian", jacobian_names, lc.solver.jacobian);
   r.read_integer("solver", "max_newton", lc.solver.max_newton);
   r.read_integer("solver", "max_cutbacks", lc.solver.max_cutbacks);
   validate(lc);
@@ -432,9 +438,11 @@ std::string to_toml(const LoadCase& lc) {
   t += fmt::format("\n[output]\n{}\nfields_every = {}\nprofile_depths = {}\ncheckpoint_every = {}\n\n",
                    dir_line.str(), lc.output.fields_every, numbers(lc.output.profile_depths),
                    lc.output.checkpoint_every);
-  t += fmt::format("[solver]\ntolerance = {:.17g}\nmax_newton = {}\nmax_cutbacks = {}\nlinear = \"{}\"\n",
+  t += fmt::format("[solver]\ntolerance = {:.17g}\nmax_newton = {}\nmax_cutbacks = {}\nlinear = \"{}\"\n"
+                   "far_field = \"{}\"\njacobian = \"{}\"\n",
                    lc.solver.tolerance, lc.solver.max_newton, lc.solver.max_cutbacks,
-                   name_of(linear_names, lc.solver.linear));
+                   name_of(linear_names, lc.solver.linear), name_of(far_field_names, lc.solver.far_field),
+                   name_of(jacobian_names, lc.solver.jacobian));
   return t;
 }
 

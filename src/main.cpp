@@ -92,6 +92,17 @@ private:
   clock::time_point start_, last_{};
 };
 
+void describe_near_field(const Simulation& sim) {
+  const NearField& near = sim.near_field();
+  if (!near.condensed) {
+    fmt::print("Newton systems: the whole mesh ({} unknowns)\n", sim.system_unknowns());
+    return;
+  }
+  fmt::print("Newton systems: {} unknowns of the near field ({} contact candidates, {} x {} elements that may "
+             "yield); the elastic far field is condensed\n",
+             sim.system_unknowns(), near.contact_nodes, near.elements_x, near.elements_y);
+}
+
 void print_mesh(const Simulation& sim) {
   const auto& p = sim.plan();
   fmt::print("mesh: {} x {} nodes, {} unknowns; fine zone {:.4g} m x {:.4g} m at spacing {:.4g} m "
@@ -99,6 +110,7 @@ void print_mesh(const Simulation& sim) {
              p.nodes_x, p.nodes_y, sim.mesh().equations(), p.fine_width, p.fine_depth, p.fine_spacing,
              p.contact_half_width_estimate, p.growth,
              sim.linear_solver() == LinearSolverKind::cholmod ? "CHOLMOD" : "KLU");
+  describe_near_field(sim);
 }
 
 int command_check(const std::string& file, const std::vector<std::string>& overrides) {
@@ -164,6 +176,10 @@ int drive(Simulation& sim, RunOutput& output, const std::string& label, bool qui
   output.finish(sim);
   show_warnings();
   if (!quiet) {
+    if (sim.near_field_growths() > 0) {
+      fmt::print("the near field grew {} time(s) during the run; ", sim.near_field_growths());
+      describe_near_field(sim);
+    }
     fmt::print("largest condition estimate of a Newton matrix: {:.3g} ({})\n", sim.largest_condition_estimate(),
                sim.linear_solver() == LinearSolverKind::cholmod ? "CHOLMOD 1/rcond" : "KLU condest");
     fmt::print("P-alpha curve: {}\n", output.curve_path().string());

@@ -123,11 +123,20 @@ InelasticBulk::InelasticBulk(const ElasticStiffness& elastic, std::unique_ptr<Po
       committed_u_(static_cast<std::size_t>(elastic.mesh().equations()), 0.0) {}
 
 bool InelasticBulk::inelastic(int ei, int ej, const double* u, std::array<VoigtVector, 4>& strains) const {
-  strains = gauss_point_strains(mesh_, ei, ej, u);
+  return inelastic(ei, ej, gather(mesh_, ei, ej, u), strains);
+}
+
+bool InelasticBulk::inelastic(int ei, int ej, const ElementVector& ue, std::array<VoigtVector, 4>& strains) const {
+  strains = gauss_point_strains(mesh_, ei, ej, ue);
   const std::size_t first = 4 * static_cast<std::size_t>(mesh_.element(ei, ej));
   for (std::size_t g = 0; g < 4; ++g)
     if (!law_->elastic(first + g, strains[g])) return true;
   return false;
+}
+
+bool InelasticBulk::inelastic_at(int ei, int ej, const double* u) const {
+  std::array<VoigtVector, 4> strains;
+  return inelastic(ei, ej, u, strains);
 }
 
 ElementVector InelasticBulk::element_force(int ei, int ej, const std::array<VoigtVector, 4>& strains) const {
@@ -142,18 +151,33 @@ ElementVector InelasticBulk::element_force(int ei, int ej, const std::array<Voig
   return fe;
 }
 
+bool InelasticBulk::force_correction(int ei, int ej, const ElementVector& ue, ElementVector& correction) const {
+  std::array<VoigtVector, 4> strains;
+  if (!inelastic(ei, ej, ue, strains)) return false;
+  correction = element_force(ei, ej, strains) - elastic_.cached_matrix(ei, ej) * ue;
+  return true;
+}
+
+bool InelasticBulk::tangent_correction(int ei, int ej, const ElementVector& ue, ElementMatrix& correction) const {
+  std::array<VoigtVector, 4> strains;
+  if (!inelastic(ei, ej, ue, strains)) return false;
+  const std::size_t first = 4 * static_cast<std::size_t>(mesh_.element(ei, ej));
+  std::array<PlaneStrainMatrix, 4> d;
+  for (std::size_t g = 0; g < 4; ++g) d[g] = law_->respond(first + g, strains[g]).tangent;
+  correction = gauss_stiffness(mesh_.rectangle(ei, ej), d, mesh_.element_kind()) - elastic_.cached_matrix(ei, ej);
+  return true;
+}
+
 void InelasticBulk::internal_force(const double* u, double* f) {
   elastic_.multiply(u, f);
-  std::array<VoigtVector, 4> strains;
+  ElementVector correction;
   for (int ei = 0; ei < mesh_.elements_x(); ++ei)
     for (int ej = 0; ej < mesh_.elements_y(); ++ej) {
-      if (!inelastic(ei, ej, u, strains)) continue;
-      // Correction f_e(u) - K_e^elastic u_e, scattered onto the free equations.
-      const ElementVector fe = element_force(ei, ej, strains) - elastic_.cached_matrix(ei, ej) * gather(mesh_, ei, ej, u);
+      if (!force_correction(ei, ej, gather(mesh_, ei, ej, u), correction)) continue;
       const auto dofs = mesh_.element_dofs(ei, ej);
       for (int a = 0; a < 8; ++a) {
         const int eq = mesh_.equation(dofs[a]);
-        if (eq >= 0) f[eq] += fe[a];
+        if (eq >= 0) f[eq] += correction[a];
       }
     }
 }
@@ -161,15 +185,10 @@ void InelasticBulk::internal_force(const double* u, double* f) {
 void InelasticBulk::tangent(const double* u, double* values) {
   const auto& k = elastic_.values();
   std::copy(k.begin(), k.end(), values);
-  std::array<VoigtVector, 4> strains;
+  ElementMatrix correction;
   for (int ei = 0; ei < mesh_.elements_x(); ++ei)
     for (int ej = 0; ej < mesh_.elements_y(); ++ej) {
-      if (!inelastic(ei, ej, u, strains)) continue;
-      const std::size_t first = 4 * static_cast<std::size_t>(mesh_.element(ei, ej));
-      std::array<PlaneStrainMatrix, 4> d;
-      for (std::size_t g = 0; g < 4; ++g) d[g] = law_->respond(first + g, strains[g]).tangent;
-      const ElementMatrix correction =
-          gauss_stiffness(mesh_.rectangle(ei, ej), d, mesh_.element_kind()) - elastic_.cached_matrix(ei, ej);
+      if (!tangent_correction(ei, ej, gather(mesh_, ei, ej, u), correction)) continue;
       const std::int32_t* pos = pattern_.element_positions(mesh_.element(ei, ej));
       for (int a = 0; a < 8; ++a)
         for (int b = 0; b < 8; ++b)

@@ -21,10 +21,17 @@ constexpr double max_relative_depth = 0.05;  // alpha / R beyond which the run w
 
 // Plastic scenes spread their contact wider than the elastic Hertz estimate, up to the punch's
 // chord sqrt(2 R alpha) when the material flows freely.  A coarse pilot run of the same load
-// case (8 elements across the chord, 4 increments) measures the final contact half-width; the
-// real mesh is planned from it with a 5% margin.  The pilot sets mesh.contact_half_width itself,
-// so it never runs a pilot of its own.  Should it fail, the chord is a safe upper bound.
-double pilot_contact_half_width(const LoadCase& lc) {
+// case (8 elements across the chord, 4 increments) measures the final contact half-width and
+// how far the plastic zone reaches; the real mesh is planned from the first with a 5% margin, the
+// condensed near field from the second.  The pilot sets mesh.contact_half_width itself, so it
+// never runs a pilot of its own, and solves its small mesh whole.  Should it fail, the chord is a
+// safe upper bound and the near field falls back to its default.
+struct PilotResult {
+  double contact_half_width = 0.0;
+  std::optional<PlasticExtent> plastic_zone;
+};
+
+PilotResult pilot_run(const LoadCase& lc) {
   const double depth = lc.max_depth();
   const double chord = std::sqrt(2.0 * lc.punch.radius * depth - depth * depth);
   LoadCase pilot = lc;
@@ -34,14 +41,26 @@ double pilot_contact_half_width(const LoadCase& lc) {
   pilot.load.path = {0.0, depth};
   pilot.load.increments = 4;
   pilot.solver.tolerance = std::max(lc.solver.tolerance, 1e-9);
+  pilot.solver.far_field = FarFieldChoice::full;
   double widest = 0.0;
   try {
     Simulation sim(pilot);
     sim.run([&](const IncrementRecord& r) { widest = std::max(widest, r.half_width); });
+    PilotResult result{widest > 0.0 ? std::min(chord, 1.05 * widest) : chord, std::nullopt};
+    const Mesh& mesh = sim.mesh();
+    PlasticExtent zone;
+    for (int ei = 0; ei < mesh.elements_x(); ++ei)
+      for (int ej = 0; ej < mesh.elements_y(); ++ej)
+        for (std::size_t g = 0; g < 4; ++g)
+          if (sim.plasticity()->law().has_yielded(4 * static_cast<std::size_t>(mesh.element(ei, ej)) + g)) {
+            zone.width = std::max(zone.width, mesh.x(ei + 1));
+            zone.depth = std::max(zone.depth, -mesh.y(ej));
+          }
+    result.plastic_zone = zone;
+    return result;
   } catch (const SolverError&) {
-    return chord;
+    return {chord, std::nullopt};
   }
-  return widest > 0.0 ? std::min(chord, 1.05 * widest) : chord;
 }
 
 // Deformation theory is exact for monotone loading; Ilyushin's unloading rule is switched on
@@ -79,9 +98,37 @@ LinearSolverKind choose_linear_solver(LinearSolverChoice choice, int unknowns) {
   return unknowns >= cholmod_crossover_unknowns ? LinearSolverKind::cholmod : LinearSolverKind::klu;
 }
 
+// Every surface node within 1.3 a + 2 h of the axis may touch (a the planned final contact
+// half-width, h the fine spacing); every element within 1.3 times the pilot's plastic zone plus
+// 2 h (or, without a pilot, within 2.5 a) may yield.  Generous on purpose: a near field too
+// small is detected after the increment and grown (Simulation::grow_near_field), which costs a
+// new condensation; one too large only costs unknowns.  "auto" solves the whole mesh only when the
+// near field would hold more than 80% of its unknowns: measured on deep_plastic.toml, a near field
+// of 55% of the unknowns still cut the time per increment by 40% (docs/DESIGN.md, section 7).
+NearField choose_near_field(const LoadCase& lc, const Mesh& mesh, const MeshPlan& plan, bool plastic,
+                            const std::optional<PlasticExtent>& plastic_zone) {
+  NearField near;
+  if (lc.solver.far_field == FarFieldChoice::full) return near;
+  const double a = plan.contact_half_width_estimate, h = plan.fine_spacing;
+  const double contact_width = 1.3 * a + 2.0 * h;
+  while (near.contact_nodes < mesh.nodes_x() && mesh.x(near.contact_nodes) <= contact_width) ++near.contact_nodes;
+  near.contact_nodes = std::min(mesh.nodes_x(), near.contact_nodes + 1);
+  if (plastic) {
+    const double width = plastic_zone ? std::max(1.3 * plastic_zone->width, contact_width) + 2.0 * h : 2.5 * a;
+    const double depth = plastic_zone ? 1.3 * plastic_zone->depth + 2.0 * h : 2.5 * a;
+    while (near.elements_x < mesh.elements_x() && mesh.x(near.elements_x) < width) ++near.elements_x;
+    while (near.elements_y < mesh.elements_y() && -mesh.y(mesh.top_row() - near.elements_y) < depth) ++near.elements_y;
+    near.contact_nodes = std::max(near.contact_nodes, near.elements_x + 1);
+  }
+  const double near_unknowns = 2.0 * (near.elements_x + 1) * (near.elements_y + 1) + near.contact_nodes;
+  near.condensed = lc.solver.far_field == FarFieldChoice::condense || near_unknowns <= 0.8 * mesh.equations();
+  return near;
+}
+
 }  // namespace
 
-Simulation::Simulation(LoadCase load_case, std::optional<double> planned_contact_half_width)
+Simulation::Simulation(LoadCase load_case, std::optional<double> planned_contact_half_width,
+                       std::optional<NearField> near_field)
     : load_case_(std::move(load_case)) {
   const auto& m = load_case_.material;
   const ElasticMaterial material{m.E, m.nu};
@@ -93,8 +140,14 @@ Simulation::Simulation(LoadCase load_case, std::optional<double> planned_contact
                        *violation);
   }
   plan_ = plan_mesh(load_case_);  // also refuses a mesh too large before any work
-  if (planned_contact_half_width) plan_ = plan_mesh(load_case_, planned_contact_half_width);
-  else if (law && !load_case_.mesh.contact_half_width) plan_ = plan_mesh(load_case_, pilot_contact_half_width(load_case_));
+  std::optional<PlasticExtent> pilot_plastic_zone;
+  if (planned_contact_half_width) {
+    plan_ = plan_mesh(load_case_, planned_contact_half_width);
+  } else if (law && !load_case_.mesh.contact_half_width) {
+    const PilotResult pilot = pilot_run(load_case_);
+    plan_ = plan_mesh(load_case_, pilot.contact_half_width);
+    pilot_plastic_zone = pilot.plastic_zone;
+  }
   mesh_ = std::make_unique<Mesh>(Mesh::from_plan(load_case_, plan_));
   mesh_->set_element_kind(choose_element(load_case_));
   pattern_ = std::make_unique<StiffnessPattern>(*mesh_);
@@ -110,15 +163,13 @@ Simulation::Simulation(LoadCase load_case, std::optional<double> planned_contact
   }
   contact_ = std::make_unique<ContactBoundary>(*mesh_, CylindricalPunch{load_case_.punch.radius}, *pattern_,
                                                stiffness_->values());
-  equations_ = std::make_unique<ContactEquations>(*pattern_, *bulk_, *contact_);
-
-  NewtonSettings settings;
-  settings.displacement_scale = load_case_.max_depth();
-  settings.force_scale = material.plane_strain_modulus() * load_case_.max_depth();
-  settings.tolerance = load_case_.solver.tolerance;
-  settings.max_iterations = load_case_.solver.max_newton;
-  settings.linear = linear_solver_ = choose_linear_solver(load_case_.solver.linear, mesh_->equations());
-  newton_ = std::make_unique<NewtonSolver>(*equations_, settings);
+  settings_.displacement_scale = load_case_.max_depth();
+  settings_.force_scale = material.plane_strain_modulus() * load_case_.max_depth();
+  settings_.tolerance = load_case_.solver.tolerance;
+  settings_.max_iterations = load_case_.solver.max_newton;
+  settings_.chord_steps = load_case_.solver.jacobian == JacobianChoice::reuse;
+  near_ = near_field ? *near_field : choose_near_field(load_case_, *mesh_, plan_, law.has_value(), pilot_plastic_zone);
+  build_system();
 
   u_.assign(static_cast<std::size_t>(mesh_->equations()), 0.0);
 
@@ -166,13 +217,19 @@ IncrementRecord Simulation::advance_to(double target) {
     const int plain_budget = std::max(8, load_case_.solver.max_newton / 4);
     for (Globalization g : {Globalization::none, Globalization::line_search}) {
       predict(trial, iterations, factorizations);
-      last_report_ = newton_->solve(trial, guess_, g, g == Globalization::none ? plain_budget : 0);
+      last_report_ = newton_->solve(trial, system_guess_, g, g == Globalization::none ? plain_budget : 0);
       iterations += last_report_.iterations;
       factorizations += last_report_.factorizations;
       if ((converged = last_report_.converged)) break;
     }
     const NewtonReport& report = last_report_;
     if (converged) {
+      from_system(system_guess_, guess_);
+      if (grow_near_field(guess_, trial)) {
+        ++near_field_growths_;
+        build_system();
+        continue;  // the same trial depth on the larger near field
+      }
       u_previous_.swap(u_);
       u_.swap(guess_);
       alpha_previous_ = alpha_;
@@ -201,21 +258,93 @@ IncrementRecord Simulation::advance_to(double target) {
 }
 
 void Simulation::predict(double trial, long& iterations, long& factorizations) {
-  if (has_previous_) {
-    extrapolate(u_previous_, alpha_previous_, u_, alpha_, trial, guess_);
-    return;
-  }
-  guess_ = u_;
-  if (!plastic_) return;
+  if (has_previous_) extrapolate(u_previous_, alpha_previous_, u_, alpha_, trial, guess_);
+  else guess_ = u_;
+  to_system(guess_, system_guess_);
+  if (has_previous_ || !plastic_) return;
   // No history to extrapolate (the first increment): the elastic contact solution at the same
   // depth settles the contact set before plasticity enters, which the coupled Newton otherwise
   // has to find through the kinks of both at once.
-  equations_->use_bulk(*stiffness_);
-  const NewtonReport elastic = newton_->solve(trial, guess_);
-  equations_->use_bulk(*plastic_);
+  equations_->use_bulk(system_elastic_bulk());
+  const NewtonReport elastic = newton_->solve(trial, system_guess_);
+  equations_->use_bulk(system_bulk());
   iterations += elastic.iterations;
   factorizations += elastic.factorizations;
-  if (!elastic.converged) guess_ = u_;
+  if (!elastic.converged) to_system(u_, system_guess_);
+}
+
+void Simulation::build_system() {
+  if (newton_) retired_symbolic_analyses_ += newton_->total_symbolic_analyses();
+  newton_.reset();
+  equations_.reset();
+  condensed_bulk_.reset();
+  condensed_elastic_.reset();
+  condensation_.reset();
+  if (near_.condensed) {
+    condensation_ = std::make_unique<FarFieldCondensation>(*stiffness_, *contact_, near_);
+    condensed_elastic_ = std::make_unique<CondensedBulk>(*condensation_, nullptr);
+    if (plastic_) condensed_bulk_ = std::make_unique<CondensedBulk>(*condensation_, plastic_.get());
+    equations_ = std::make_unique<ContactEquations>(condensation_->pattern(), system_bulk(), condensation_->contact());
+  } else {
+    equations_ = std::make_unique<ContactEquations>(*pattern_, *bulk_, *contact_);
+  }
+  settings_.linear = linear_solver_ = choose_linear_solver(load_case_.solver.linear, static_cast<int>(system_unknowns()));
+  newton_ = std::make_unique<NewtonSolver>(*equations_, settings_);
+}
+
+BulkOperator& Simulation::system_bulk() {
+  if (!condensation_) return *bulk_;
+  return plastic_ ? static_cast<BulkOperator&>(*condensed_bulk_) : *condensed_elastic_;
+}
+
+BulkOperator& Simulation::system_elastic_bulk() {
+  return condensation_ ? static_cast<BulkOperator&>(*condensed_elastic_) : *stiffness_;
+}
+
+std::int64_t Simulation::system_unknowns() const {
+  return condensation_ ? condensation_->size() : mesh_->equations();
+}
+
+void Simulation::to_system(const std::vector<double>& u, std::vector<double>& u_system) const {
+  if (condensation_) condensation_->restrict_to_near(u, u_system);
+  else u_system = u;
+}
+
+void Simulation::from_system(const std::vector<double>& u_system, std::vector<double>& u) const {
+  if (condensation_) condensation_->expand(u_system, u);
+  else u = u_system;
+}
+
+bool Simulation::grow_near_field(const std::vector<double>& u, double alpha) {
+  if (!condensation_) return false;
+  // A far surface node the punch would penetrate: the contact needs more candidates.
+  const auto& candidates = contact_->candidates();
+  const double tolerance = 1e-10 * load_case_.max_depth();
+  bool penetrates = false;
+  for (std::size_t k = static_cast<std::size_t>(near_.contact_nodes); k < candidates.size(); ++k)
+    if (u[candidates[k].equation] + alpha - candidates[k].surface_height > tolerance) penetrates = true;
+  // A far element that would leave the elastic range: the near elements must reach it.
+  bool yields = false;
+  if (plastic_) {
+    const int top = mesh_->elements_y() - 1;
+    for (int ei = 0; ei < mesh_->elements_x() && !yields; ++ei)
+      for (int ej = 0; ej < mesh_->elements_y(); ++ej) {
+        if (ei < near_.elements_x && ej > top - near_.elements_y) continue;
+        if (plastic_->inelastic_at(ei, ej, u.data())) {
+          yields = true;
+          break;
+        }
+      }
+  }
+  if (!penetrates && !yields) return false;
+  const auto grown = [](int count, int limit) { return std::min(limit, count + count / 2 + 2); };
+  if (yields) {
+    near_.elements_x = grown(near_.elements_x, mesh_->elements_x());
+    near_.elements_y = grown(near_.elements_y, mesh_->elements_y());
+  }
+  if (penetrates) near_.contact_nodes = grown(near_.contact_nodes, mesh_->nodes_x());
+  if (plastic_) near_.contact_nodes = std::max(near_.contact_nodes, std::min(near_.elements_x + 1, mesh_->nodes_x()));
+  return true;
 }
 
 ContactResult Simulation::contact() const {
@@ -242,6 +371,7 @@ SimulationState Simulation::state() const {
   s.u_previous = u_previous_;
   s.history = bulk_->history();
   s.in_contact = contact().in_contact;
+  s.near_field = near_;
   return s;
 }
 
@@ -260,6 +390,15 @@ void Simulation::restore(const SimulationState& s) {
   u_ = s.u;
   u_previous_ = s.u_previous;
   bulk_->restore(s.history, u_.data());
+  const NearField& near = s.near_field;
+  if (near.condensed && (near.contact_nodes < 1 || near.contact_nodes > mesh_->nodes_x() || near.elements_x < 0 ||
+                         near.elements_x > mesh_->elements_x() || near.elements_y < 0 ||
+                         near.elements_y > mesh_->elements_y()))
+    throw std::invalid_argument("the saved near field does not fit this mesh");
+  if (!(s.near_field == near_)) {
+    near_ = s.near_field;
+    build_system();
+  }
   if (contact().in_contact != s.in_contact)
     throw std::invalid_argument("the saved contact set does not follow from the saved displacement");
 }

@@ -16,7 +16,7 @@ static_assert(std::is_same_v<sunindextype, std::int64_t>,
 // ---------------------------------------------------------------------------------------------
 // The residual and Jacobian of elastic contact.
 
-ContactEquations::ContactEquations(const StiffnessPattern& pattern, BulkModel& bulk, const ContactBoundary& contact)
+ContactEquations::ContactEquations(const StiffnessPattern& pattern, BulkOperator& bulk, const ContactBoundary& contact)
     : pattern_(pattern), bulk_(&bulk), contact_(contact), internal_force_(pattern.size()) {
   for (const auto& c : contact.candidates()) contact_rows_.push_back(pattern.row_positions(c.equation));
 }
@@ -85,6 +85,7 @@ struct KluWithReuse {
   long numeric_factorizations = 0;
   long symbolic_analyses = 0;
   bool fresh_numeric = false;  // the next setup factors afresh (new pivots), keeping the analysis
+  bool keep_factor = false;    // the next setup keeps the current factor (a chord step)
   double condition_estimate = 0.0;  // of the increment's first (fresh) factorization
 
   static KluWithReuse* self(SUNLinearSolver s) { return static_cast<KluWithReuse*>(s->content); }
@@ -109,6 +110,10 @@ struct KluWithReuse {
     KluWithReuse* me = self(s);
     SUNLinearSolver klu = me->klu.get();
     SUNLinearSolverContent_KLU content = klu_content(klu);
+    if (me->keep_factor && content->numeric) {
+      me->keep_factor = false;
+      return SUNLS_SUCCESS;
+    }
     ++me->numeric_factorizations;
     if (me->fresh_numeric && content->symbolic) {
       me->fresh_numeric = false;
@@ -149,6 +154,9 @@ struct KluWithReuse {
 
 // ---------------------------------------------------------------------------------------------
 
+// A chord step needs the previous step to have cut the residual by this factor (see above).
+constexpr double chord_contraction = 1e-2;
+
 struct NewtonSolver::Impl {
   IncrementEquations& equations;
   NewtonSettings settings;
@@ -164,6 +172,10 @@ struct NewtonSolver::Impl {
   std::vector<double> residual_history;
   ActiveSetHistory active_sets;
   bool cycling = false;
+  // Chord steps (see jacobian_callback): the active set and residual at the last factorization.
+  bool chord_allowed = false, factored = false;
+  std::uint64_t factored_signature = 0;
+  double previous_norm = 0.0;
 
   Impl(IncrementEquations& eq, const NewtonSettings& s)
       : equations(eq),
@@ -240,9 +252,26 @@ struct NewtonSolver::Impl {
     const double* f = N_VGetArrayPointer(fu);
     double norm = 0.0;
     for (sunindextype i = 0; i < N_VGetLength(fu); ++i) norm = std::max(norm, std::abs(f[i]));
-    if (me->active_sets.record(me->equations.active_set_signature(), norm)) {
+    const std::uint64_t signature = me->equations.active_set_signature();
+    if (me->active_sets.record(signature, norm)) {
       me->cycling = true;
       return 1;
+    }
+    // Chord step: keep the last factor (KINSOL still gets the fresh Jacobian, for its line search
+    // and norms) when the active set is the one factored and the last step cut the residual by
+    // chord_contraction or better -- the iteration is then in Newton's quadratic range, where the
+    // Jacobian has changed by O(|du|) and the old factor contracts almost as well.  A chord step
+    // that contracts less is followed by a fresh factorization.  Only this solve's history
+    // decides, so a resumed run repeats the same steps.
+    const bool chord = me->chord_allowed && me->factored && signature == me->factored_signature &&
+                       norm <= chord_contraction * me->previous_norm;
+    me->previous_norm = norm;
+    if (chord) {
+      if (me->cholmod) me->cholmod->keep_factor_once();
+      else me->klu.keep_factor = true;
+    } else {
+      me->factored = true;
+      me->factored_signature = signature;
     }
     return 0;
   }
@@ -277,6 +306,10 @@ NewtonReport NewtonSolver::solve(double alpha, std::vector<double>& u, Globaliza
   std::copy(u.begin(), u.end(), data);
   m.active_sets.clear();
   m.cycling = false;
+  m.chord_allowed = m.settings.chord_steps && globalization == Globalization::none;
+  m.factored = false;
+  m.previous_norm = 0.0;
+  m.klu.keep_factor = false;
   const long factorizations_before = total_factorizations();
   const long analyses_before = total_symbolic_analyses();
 

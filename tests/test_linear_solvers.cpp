@@ -40,8 +40,11 @@ TEST(LinearSolvers, KluAndCholmodGiveTheSameCurve) {
 }
 
 TEST(LinearSolvers, AutoPicksCholmodForLargeMeshesOnly) {
-  Simulation small(shipped_case("elastic.toml", {"mesh.contact_nodes=3", "solver.linear=auto", "load.increments=1"}));
-  Simulation large(shipped_case("elastic.toml", {"mesh.contact_nodes=10", "solver.linear=auto", "load.increments=1"}));
+  // The whole mesh in the Newton systems: "auto" looks at the size of the system it factors.
+  Simulation small(shipped_case("elastic.toml", {"mesh.contact_nodes=3", "solver.linear=auto", "load.increments=1",
+                                                 "solver.far_field=full"}));
+  Simulation large(shipped_case("elastic.toml", {"mesh.contact_nodes=10", "solver.linear=auto", "load.increments=1",
+                                                 "solver.far_field=full"}));
   ASSERT_LT(small.mesh().equations(), 1000);
   ASSERT_GT(large.mesh().equations(), 1000);
   EXPECT_EQ(small.linear_solver(), LinearSolverKind::klu);
@@ -51,6 +54,11 @@ TEST(LinearSolvers, AutoPicksCholmodForLargeMeshesOnly) {
   EXPECT_EQ(large.symbolic_analyses(), 1);  // CHOLMOD analyses the fixed pattern once too
   EXPECT_GT(small.contact().force, 0.0);
   EXPECT_GT(large.contact().force, 0.0);
+  // Condensed, the same large mesh leaves a system far below the crossover: KLU.
+  Simulation condensed(shipped_case("elastic.toml", {"mesh.contact_nodes=10", "solver.linear=auto"}));
+  ASSERT_TRUE(condensed.near_field().condensed);
+  EXPECT_LT(condensed.system_unknowns(), 1000);
+  EXPECT_EQ(condensed.linear_solver(), LinearSolverKind::klu);
 }
 
 TEST(ActiveSetCycling, ReturningToAnEarlierSetWithoutProgressIsACycle) {

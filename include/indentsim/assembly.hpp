@@ -16,6 +16,9 @@ namespace indentsim {
 class StiffnessPattern {
 public:
   explicit StiffnessPattern(const Mesh& mesh);
+  /// A symmetric pattern given column by column (sorted rows, the diagonal present); it has no
+  /// element positions (element_positions is not available).  For a condensed system.
+  StiffnessPattern(std::vector<std::int64_t> column_start, std::vector<std::int64_t> row_index);
 
   std::int64_t size() const { return size_; }
   std::int64_t nonzeros() const { return static_cast<std::int64_t>(row_index_.size()); }
@@ -52,15 +55,21 @@ struct GaussPointState {
   bool plastic = false;
 };
 
-/// The bulk part of the discrete equations: internal forces f(u) and their tangent df/du in the
-/// fixed pattern, and the committed state for output.
-class BulkModel {
+/// What a Newton iteration needs of the bulk: internal forces f(u) and their tangent df/du in a
+/// fixed pattern (of the whole mesh, or of a condensed near field).
+class BulkOperator {
 public:
-  virtual ~BulkModel() = default;
-  /// f = f_int(u) over the free equations.
+  virtual ~BulkOperator() = default;
+  /// f = f_int(u) over the unknowns of the pattern.
   virtual void internal_force(const double* u, double* f) = 0;
   /// values = d f_int / du at u, in the fixed pattern.
   virtual void tangent(const double* u, double* values) = 0;
+};
+
+/// The bulk part of the discrete equations on the whole mesh (free equations), and the committed
+/// state for output.
+class BulkModel : public BulkOperator {
+public:
   /// Accepts u as the converged state of an increment (history, secant matrices, statistics).
   virtual void commit(const double* u) = 0;
   /// Integration points beyond the elastic limit at the committed state.
@@ -115,5 +124,7 @@ private:
 
 /// Strain (eps11, eps22, gamma12) at each 2x2 Gauss point of element (ei, ej).
 std::array<VoigtVector, 4> gauss_point_strains(const Mesh& mesh, int ei, int ej, const double* u);
+/// The same from the element's 8 unknowns (paper order).
+std::array<VoigtVector, 4> gauss_point_strains(const Mesh& mesh, int ei, int ej, const ElementVector& ue);
 
 }  // namespace indentsim

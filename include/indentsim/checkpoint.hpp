@@ -7,7 +7,8 @@
 //   "INDSIMCK" | u32 format version | u64 payload length | payload | u64 FNV-1a of all before
 // The payload holds the load case as run (TOML text and its hash), the mesh plan and node
 // coordinates, the simulation state (depths, displacement and predictor state, active contact
-// set, material history at every Gauss point, increment controller), and the curve so far.
+// set, material history at every Gauss point, increment controller, condensed near field), and
+// the curve so far.
 #include <cstdint>
 #include <filesystem>
 #include <memory>
@@ -19,7 +20,8 @@
 
 namespace indentsim {
 
-constexpr std::uint32_t checkpoint_format_version = 1;
+// Format 2 (the condensed near field joined the state) reads no format-1 file.
+constexpr std::uint32_t checkpoint_format_version = 2;
 
 struct Checkpoint {
   std::string load_case_toml;            ///< to_toml() of the load case as run

@@ -37,6 +37,9 @@ class ContactBoundary {
 public:
   ContactBoundary(const Mesh& mesh, const CylindricalPunch& punch, const StiffnessPattern& pattern,
                   const std::vector<double>& stiffness_values);
+  /// Given candidates (a subset renumbered onto a condensed system, say).
+  ContactBoundary(const CylindricalPunch& punch, std::vector<ContactCandidate> candidates)
+      : punch_(punch), candidates_(std::move(candidates)) {}
 
   const std::vector<ContactCandidate>& candidates() const { return candidates_; }
   const CylindricalPunch& punch() const { return punch_; }

@@ -57,9 +57,15 @@ struct OutputInput {
 };
 
 enum class LinearSolverChoice { automatic, klu, cholmod };
+/// Whether the linear-elastic far field is condensed out of the Newton systems (docs/DESIGN.md 7).
+enum class FarFieldChoice { automatic, condense, full };
+/// Whether a converging Newton iteration may keep the last factorization (a chord step).
+enum class JacobianChoice { reuse, fresh };
 
 struct SolverInput {
-  LinearSolverChoice linear = LinearSolverChoice::klu;  ///< "klu" (default) | "cholmod" | "auto" 
+  LinearSolverChoice linear = LinearSolverChoice::klu;  ///< "klu" (default) | "cholmod" | "auto"
+  FarFieldChoice far_field = FarFieldChoice::automatic;  ///< "auto" (default) | "condense" | "full"
+  JacobianChoice jacobian = JacobianChoice::reuse;       ///< "reuse" (default) | "fresh"
   double tolerance = 1e-11;  ///< residual max-norm relative to E* x max depth
   int max_newton = 50;       ///< Newton iterations per increment before a cutback
   int max_cutbacks = 10;     ///< halvings of one increment before the run stops

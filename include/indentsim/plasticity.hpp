@@ -108,11 +108,21 @@ public:
   void restore(const std::vector<double>& history, const double* u) override;
 
   const PointLaw& law() const { return *law_; }
+  const ElasticStiffness& elastic() const { return elastic_; }
   void set_loading(bool beyond_previous_peak) { law_->set_loading(beyond_previous_peak); }
+
+  /// The departure of element (ei, ej) from linear elasticity at its unknowns ue (paper order):
+  /// the internal force f_e - K_e ue, or the tangent d f_e / d ue - K_e.  False, with nothing
+  /// written, where all four Gauss points respond elastically (as the whole far field does).
+  bool force_correction(int ei, int ej, const ElementVector& ue, ElementVector& correction) const;
+  bool tangent_correction(int ei, int ej, const ElementVector& ue, ElementMatrix& correction) const;
+  /// True if a Gauss point of element (ei, ej) is inelastic at u (free-equation vector).
+  bool inelastic_at(int ei, int ej, const double* u) const;
 
 private:
   /// True if any Gauss point of the element is inelastic at u (strains returned).
   bool inelastic(int ei, int ej, const double* u, std::array<VoigtVector, 4>& strains) const;
+  bool inelastic(int ei, int ej, const ElementVector& ue, std::array<VoigtVector, 4>& strains) const;
   ElementVector element_force(int ei, int ej, const std::array<VoigtVector, 4>& strains) const;
 
   const ElasticStiffness& elastic_;

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "indentsim/assembly.hpp"
+#include "indentsim/condensation.hpp"
 #include "indentsim/contact.hpp"
 #include "indentsim/layer_forces.hpp"
 #include "indentsim/load_case.hpp"
@@ -32,14 +33,17 @@ struct SimulationState {
   std::vector<double> u, u_previous;  ///< displacement and the previous one (the predictor's)
   std::vector<double> history;        ///< the bulk model's carried material state
   std::vector<char> in_contact;       ///< the active contact set at u (implied by u; kept as a check)
+  NearField near_field;               ///< what the Newton iterations solve for (it may have grown)
 };
 
 class Simulation {
 public:
   /// Throws InputError when the load case asks for a model not available or a mesh too large.
   /// `planned_contact_half_width`, when given, sizes the mesh without a pilot run (a resumed run
-  /// rebuilds exactly the mesh of the run it continues).
-  explicit Simulation(LoadCase load_case, std::optional<double> planned_contact_half_width = std::nullopt);
+  /// rebuilds exactly the mesh of the run it continues), and `near_field`, when given, is the
+  /// condensed near field to solve for (a resumed run continues on the near field it had).
+  explicit Simulation(LoadCase load_case, std::optional<double> planned_contact_half_width = std::nullopt,
+                      std::optional<NearField> near_field = std::nullopt);
   ~Simulation();
 
   const LoadCase& load_case() const { return load_case_; }
@@ -74,19 +78,38 @@ public:
   /// after separation, the residual depth of the imprint where the punch left it.
   double free_surface_depth() const;
   std::vector<LayerForce> layer_forces() const;
-  long symbolic_analyses() const { return newton_->total_symbolic_analyses(); }
+  long symbolic_analyses() const {
+    return retired_symbolic_analyses_ + (newton_ ? newton_->total_symbolic_analyses() : 0);
+  }
   /// The largest condition estimate of any converged increment's Jacobian so far.
   double largest_condition_estimate() const { return largest_condition_; }
   /// The sparse direct solver chosen for this run (solver.linear, "auto" resolved).
   LinearSolverKind linear_solver() const { return linear_solver_; }
   /// Warnings raised so far (each once), e.g. a contact zone that left the fine zone.
   const std::vector<std::string>& warnings() const { return warnings_; }
+  /// The part of the mesh the Newton iterations solve for (condensed or not).
+  const NearField& near_field() const { return near_; }
+  /// Unknowns of each Newton system: the condensed near field, or all free equations.
+  std::int64_t system_unknowns() const;
+  /// Times the near field had to grow (a far element would have yielded, or a far surface node
+  /// would have penetrated the punch) and an increment was repeated.
+  int near_field_growths() const { return near_field_growths_; }
 
 private:
   IncrementRecord record(double wall_seconds, long iterations, long factorizations, int cutbacks);
   /// Initial guess for depth `trial` into guess_ (counts any solve it needs).
   void predict(double trial, long& iterations, long& factorizations);
   void check_fine_zone(double half_width);
+  /// (Re)builds the Newton system for near_: condensation, operators, contact, KINSOL.
+  void build_system();
+  /// The bulk operators the Newton system uses (plastic, and linear elastic for the predictor).
+  BulkOperator& system_bulk();
+  BulkOperator& system_elastic_bulk();
+  void to_system(const std::vector<double>& u, std::vector<double>& u_system) const;
+  void from_system(const std::vector<double>& u_system, std::vector<double>& u) const;
+  /// In a condensed run: grows near_ if the converged full solution `u` at depth `alpha` breaks the
+  /// condensation's assumption; true if it grew (the increment must be repeated).
+  bool grow_near_field(const std::vector<double>& u, double alpha);
 
   LoadCase load_case_;
   MeshPlan plan_;
@@ -96,12 +119,18 @@ private:
   std::unique_ptr<InelasticBulk> plastic_;
   BulkModel* bulk_ = nullptr;  // stiffness_ or plastic_
   std::unique_ptr<ContactBoundary> contact_;
+  NewtonSettings settings_;
+  NearField near_;
+  std::unique_ptr<FarFieldCondensation> condensation_;      // null when the whole mesh is solved
+  std::unique_ptr<CondensedBulk> condensed_bulk_, condensed_elastic_;
   std::unique_ptr<ContactEquations> equations_;
-  std::unique_ptr<NewtonSolver> newton_;
+  std::unique_ptr<NewtonSolver> newton_;                    // null until the system is built
+  long retired_symbolic_analyses_ = 0;                      // of systems replaced by a larger near field
+  int near_field_growths_ = 0;
 
   double alpha_ = 0.0, alpha_previous_ = 0.0;
   double deepest_ = 0.0;  ///< the largest converged depth so far (the load path's peak)
-  std::vector<double> u_, u_previous_, guess_;
+  std::vector<double> u_, u_previous_, guess_, system_guess_;
   bool has_previous_ = false;
   int rows_ = 0;
   std::uint64_t next_target_ = 0;

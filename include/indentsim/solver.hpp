@@ -48,17 +48,17 @@ public:
 /// handles the material nonlinearity and the contact together.
 class ContactEquations : public IncrementEquations {
 public:
-  ContactEquations(const StiffnessPattern& pattern, BulkModel& bulk, const ContactBoundary& contact);
+  ContactEquations(const StiffnessPattern& pattern, BulkOperator& bulk, const ContactBoundary& contact);
   const StiffnessPattern& pattern() const override { return pattern_; }
   /// Solve with another bulk model on the same pattern (the elastic predictor of a plastic run).
-  void use_bulk(BulkModel& bulk) { bulk_ = &bulk; }
+  void use_bulk(BulkOperator& bulk) { bulk_ = &bulk; }
   std::uint64_t active_set_signature() const override { return signature_; }
   void residual(const double* u, double alpha, double* f) override;
   void jacobian(const double* u, double alpha, double* values) override;
 
 private:
   const StiffnessPattern& pattern_;
-  BulkModel* bulk_;
+  BulkOperator* bulk_;
   const ContactBoundary& contact_;
   std::vector<std::vector<std::int64_t>> contact_rows_;  // value positions of each candidate's row
   std::vector<double> internal_force_;                    // scratch, sized once
@@ -66,7 +66,7 @@ private:
   // KINSOL evaluates F(u) before J(u) at the same u, so the Jacobian reuses them instead of a
   // second pass over the elements.
   std::vector<double> residual_u_, residual_contact_force_;
-  const BulkModel* residual_bulk_ = nullptr;
+  const BulkOperator* residual_bulk_ = nullptr;
   std::uint64_t signature_ = 0;
 };
 
@@ -80,6 +80,9 @@ struct NewtonSettings {
   double force_scale = 1.0;         ///< typical |F| [N/m] (KINSOL's fscale = 1/this)
   double tolerance = 1e-11;         ///< on max |F| / force_scale
   int max_iterations = 50;
+  /// Chord steps: a converging iteration keeps the last factorization (NewtonSolver).  Off, every
+  /// iteration factors its own Jacobian (exact semi-smooth Newton, quadratic near the solution).
+  bool chord_steps = true;
 };
 
 enum class Globalization {

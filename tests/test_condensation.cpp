@@ -1,0 +1,168 @@
+// Static condensation of the elastic far field (docs/DESIGN.md, section 7): the Schur complement is
+// exact, the condensed and full solves give the same curve to solver tolerance, a near field too
+// small is detected and grown, and chord steps change the work, not the answer.
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include "indentsim/condensation.hpp"
+#include "indentsim/simulation.hpp"
+#include "test_support.hpp"
+
+using namespace indentsim;
+using indentsim::testing::shipped_case;
+
+namespace {
+
+struct Outcome {
+  std::vector<IncrementRecord> rows;
+  std::vector<double> u;
+  NearField near;
+  int growths = 0;
+  long factorizations = 0;
+};
+
+Outcome solve(const LoadCase& lc, std::optional<NearField> near = std::nullopt) {
+  Simulation sim(lc, std::nullopt, near);
+  Outcome r;
+  sim.run([&](const IncrementRecord& rec) {
+    r.rows.push_back(rec);
+    r.factorizations += rec.factorizations;
+  });
+  r.u = sim.displacement();
+  r.near = sim.near_field();
+  r.growths = sim.near_field_growths();
+  return r;
+}
+
+double largest_magnitude(const std::vector<double>& v) {
+  double m = 0.0;
+  for (double x : v) m = std::max(m, std::abs(x));
+  return m;
+}
+
+void expect_same_curve(const Outcome& a, const Outcome& b, double relative) {
+  ASSERT_EQ(a.rows.size(), b.rows.size());
+  double peak = 0.0;
+  for (const auto& r : a.rows) peak = std::max(peak, r.force);
+  for (std::size_t k = 0; k < a.rows.size(); ++k) {
+    EXPECT_NEAR(a.rows[k].force, b.rows[k].force, relative * peak) << "step " << k;
+    EXPECT_EQ(a.rows[k].contact_nodes, b.rows[k].contact_nodes) << "step " << k;
+    EXPECT_EQ(a.rows[k].plastic_points, b.rows[k].plastic_points) << "step " << k;
+  }
+  ASSERT_EQ(a.u.size(), b.u.size());
+  const double scale = largest_magnitude(a.u);
+  for (std::size_t i = 0; i < a.u.size(); ++i) ASSERT_NEAR(a.u[i], b.u[i], relative * scale) << "unknown " << i;
+}
+
+}  // namespace
+
+// The condensed operator is the Schur complement of K_FF: for any near-field displacement, the
+// expanded displacement satisfies the far-field equations (K u)_F = 0, and (K u)_R = K_red u_R.
+TEST(FarFieldCondensation, SchurComplementIsExact) {
+  for (const char* name : {"elastic.toml", "paper.toml"}) {
+    SCOPED_TRACE(name);
+    const LoadCase lc = shipped_case(name, {"mesh.contact_nodes=6"});
+    const MeshPlan plan = plan_mesh(lc);
+    Mesh mesh = Mesh::from_plan(lc, plan);
+    const StiffnessPattern pattern(mesh);
+    const ElasticStiffness k(mesh, ElasticMaterial{lc.material.E, lc.material.nu}, pattern);
+    const ContactBoundary contact(mesh, CylindricalPunch{lc.punch.radius}, pattern, k.values());
+    const NearField near{true, 8, name == std::string("paper.toml") ? 6 : 0, name == std::string("paper.toml") ? 5 : 0};
+    const FarFieldCondensation condensation(k, contact, near);
+    ASSERT_LT(condensation.size(), mesh.equations() / 4);
+    ASSERT_GT(condensation.interface_size(), 0);
+
+    std::mt19937 random(7);
+    std::uniform_real_distribution<double> unit(-1.0, 1.0);
+    std::vector<double> u_near(static_cast<std::size_t>(condensation.size())), u, f(u_near.size()), ku(mesh.equations());
+    for (double& x : u_near) x = 1e-6 * unit(random);
+    condensation.expand(u_near, u);
+    k.multiply(u.data(), ku.data());
+    condensation.pattern().multiply(condensation.values(), u_near.data(), f.data());
+
+    const double force_scale = largest_magnitude(ku);
+    std::vector<char> is_near(static_cast<std::size_t>(mesh.equations()), 0);
+    for (int e : condensation.near_equations()) is_near[e] = 1;
+    for (int e = 0; e < mesh.equations(); ++e) {
+      if (is_near[e]) continue;
+      ASSERT_NEAR(ku[e], 0.0, 1e-11 * force_scale) << "far equation " << e;
+    }
+    for (std::size_t r = 0; r < u_near.size(); ++r)
+      ASSERT_NEAR(f[r], ku[condensation.near_equations()[r]], 1e-11 * force_scale) << "near unknown " << r;
+    // The Schur complement of an SPD matrix is SPD: its diagonal stays positive (and softer).
+    for (std::int64_t r = 0; r < condensation.size(); ++r)
+      EXPECT_GT(condensation.values()[condensation.pattern().diagonal_position(static_cast<int>(r))], 0.0);
+  }
+}
+
+TEST(FarFieldCondensation, ElasticSceneSolvesOnlyForTheContactCandidates) {
+  Simulation sim(shipped_case("elastic.toml", {"mesh.contact_nodes=10"}));
+  ASSERT_TRUE(sim.near_field().condensed);
+  EXPECT_EQ(sim.near_field().elements_x, 0);
+  EXPECT_EQ(sim.system_unknowns(), sim.near_field().contact_nodes);
+  EXPECT_LT(sim.system_unknowns(), sim.mesh().equations() / 50);
+}
+
+TEST(FarFieldCondensation, CondensedAndFullSolvesGiveTheSameCurve) {
+  for (const char* name : {"elastic.toml", "paper.toml", "load_unload.toml", "power_law.toml"}) {
+    SCOPED_TRACE(name);
+    auto with = [&](const char* far_field) {
+      return solve(shipped_case(name, {"mesh.contact_nodes=8", std::string("solver.far_field=") + far_field}));
+    };
+    const Outcome condensed = with("condense"), full = with("full");
+    ASSERT_TRUE(condensed.near.condensed);
+    ASSERT_FALSE(full.near.condensed);
+    expect_same_curve(condensed, full, 1e-9);
+  }
+}
+
+TEST(FarFieldCondensation, TooSmallANearFieldGrowsAndGivesTheSameCurve) {
+  // Elastic: 3 contact candidates for a contact of about 8 nodes.
+  const LoadCase elastic = shipped_case("elastic.toml", {"mesh.contact_nodes=8", "solver.far_field=full"});
+  const Outcome small_elastic = solve(elastic, NearField{true, 3, 0, 0});
+  EXPECT_GE(small_elastic.growths, 1);
+  EXPECT_GT(small_elastic.near.contact_nodes, 8);
+  expect_same_curve(small_elastic, solve(elastic), 1e-9);
+
+  // Plastic: a 2 x 2 block of near elements under a plastic zone several times larger.
+  const LoadCase plastic = shipped_case("paper.toml", {"mesh.contact_nodes=8", "solver.far_field=full"});
+  const Outcome small_plastic = solve(plastic, NearField{true, 3, 2, 2});
+  EXPECT_GE(small_plastic.growths, 1);
+  EXPECT_GT(small_plastic.near.elements_x, 2);
+  EXPECT_GT(small_plastic.near.elements_y, 2);
+  expect_same_curve(small_plastic, solve(plastic), 1e-9);
+}
+
+TEST(FarFieldCondensation, AResumedRunContinuesOnTheGrownNearField) {
+  const LoadCase lc = shipped_case("paper.toml", {"mesh.contact_nodes=8"});
+  Simulation first(lc, std::nullopt, NearField{true, 3, 2, 2});
+  first.run();
+  ASSERT_GE(first.near_field_growths(), 1);
+  const SimulationState state = first.state();
+  EXPECT_EQ(state.near_field, first.near_field());
+  Simulation second(lc, first.plan().contact_half_width_estimate);
+  second.restore(state);
+  EXPECT_EQ(second.near_field(), first.near_field());
+  EXPECT_EQ(second.system_unknowns(), first.system_unknowns());
+  // A near field that does not fit the mesh is refused.
+  SimulationState broken = state;
+  broken.near_field.elements_x = second.mesh().elements_x() + 1;
+  EXPECT_THROW(second.restore(broken), std::invalid_argument);
+}
+
+TEST(ChordSteps, KeepTheCurveAndSaveFactorizations) {
+  for (const char* name : {"paper.toml", "deep_plastic.toml"}) {
+    SCOPED_TRACE(name);
+    const Outcome reuse = solve(shipped_case(name, {"mesh.contact_nodes=10", "solver.jacobian=reuse"}));
+    const Outcome fresh = solve(shipped_case(name, {"mesh.contact_nodes=10", "solver.jacobian=fresh"}));
+    // Both converge to the same tolerance on the same equations; the iterates differ.
+    expect_same_curve(reuse, fresh, 1e-8);
+    EXPECT_LE(reuse.factorizations, fresh.factorizations);
+    RecordProperty(std::string("factorizations_") + name, fmt::format("{} reuse, {} fresh", reuse.factorizations,
+                                                                      fresh.factorizations));
+  }
+}
