@@ -5,8 +5,15 @@
 // the medians are reported (this machine is noisy).
 //
 //   indentsim_bench [repeats] [loadcase ...]     (default: loadcases/elastic.toml, loadcases/paper.toml)
+//   indentsim_bench --scaling [loadcase ...]      (default: loadcases/elastic.toml)
+//
+// --scaling: one run per mesh from 1e4 to 1.1e6 unknowns (contact_nodes 20 to 300), 3 increments,
+// solver.linear = "auto", with the far field condensed and (up to `full_limit` unknowns) solved
+// whole; prints setup time (mesh, assembly, condensation, pilot), median time per increment and
+// factorizations per increment, and the least-squares exponent p of time ~ DOFs^p.
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -62,7 +69,68 @@ void bench(const std::string& file, int repeats) {
   }
 }
 
+double fitted_exponent(const std::vector<double>& unknowns, const std::vector<double>& seconds) {
+  // Least-squares slope of log(seconds) against log(unknowns).
+  double mx = 0, my = 0;
+  const auto n = static_cast<double>(unknowns.size());
+  for (std::size_t k = 0; k < unknowns.size(); ++k) {
+    mx += std::log(unknowns[k]) / n;
+    my += std::log(seconds[k]) / n;
+  }
+  double sxy = 0, sxx = 0;
+  for (std::size_t k = 0; k < unknowns.size(); ++k) {
+    sxy += (std::log(unknowns[k]) - mx) * (std::log(seconds[k]) - my);
+    sxx += (std::log(unknowns[k]) - mx) * (std::log(unknowns[k]) - mx);
+  }
+  return sxx > 0 ? sxy / sxx : 0.0;
+}
+
+void scaling(const std::string& file) {
+  constexpr int full_limit = 700'000;  // the whole-mesh solve beyond this takes minutes per run
+  fmt::print("\n{} scaling (3 increments, solver.linear = auto)\n", file);
+  fmt::print("{:>13} {:>9} {:>10} {:>10} {:>10} {:>13} {:>11} {:>12}\n", "contact_nodes", "unknowns", "far_field",
+             "system", "setup_s", "s/increment", "factor/inc", "P_final");
+  for (const char* far_field : {"condense", "full"}) {
+    std::vector<double> unknowns, per_increment, setups;
+    for (int contact_nodes : {20, 40, 80, 160, 300}) {
+      const LoadCase lc = read_load_case(file, {"mesh.contact_nodes=" + std::to_string(contact_nodes),
+                                                "load.increments=3", "solver.linear=auto",
+                                                std::string("solver.far_field=") + far_field});
+      if (std::string(far_field) == "full" && plan_mesh(lc).unknowns() > full_limit) break;
+      const auto t0 = std::chrono::steady_clock::now();
+      Simulation sim(lc);
+      const double setup = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      std::vector<double> times;
+      long factorizations = 0;
+      sim.run([&](const IncrementRecord& rec) {
+        if (rec.step == 0) return;
+        times.push_back(rec.wall_seconds);
+        factorizations += rec.factorizations;
+      });
+      unknowns.push_back(sim.mesh().equations());
+      per_increment.push_back(median(times));
+      setups.push_back(setup);
+      fmt::print("{:>13} {:>9} {:>10} {:>10} {:>10.3f} {:>13.4f} {:>11.2f} {:>12.6e}\n", contact_nodes,
+                 sim.mesh().equations(), far_field, sim.system_unknowns(), setup, per_increment.back(),
+                 static_cast<double>(factorizations) / static_cast<double>(times.size()), sim.contact().force);
+      std::fflush(stdout);
+    }
+    if (unknowns.size() >= 2)
+      fmt::print("  {}: time per increment ~ DOFs^{:.2f}, setup ~ DOFs^{:.2f} (from {:.3g} to {:.3g} unknowns)\n",
+                 far_field, fitted_exponent(unknowns, per_increment), fitted_exponent(unknowns, setups),
+                 unknowns.front(), unknowns.back());
+  }
+}
+
 int main(int argc, char** argv) {
+  if (argc > 1 && std::string(argv[1]) == "--scaling") {
+    std::vector<std::string> files;
+    for (int i = 2; i < argc; ++i) files.emplace_back(argv[i]);
+    if (files.empty()) files.push_back(std::string(INDENTSIM_SOURCE_DIR) + "/loadcases/elastic.toml");
+    fmt::print("indentsim scaling benchmark\n");
+    for (const auto& f : files) scaling(f);
+    return 0;
+  }
   const int repeats = argc > 1 ? std::max(1, std::atoi(argv[1])) : 3;
   std::vector<std::string> files;
   for (int i = 2; i < argc; ++i) files.emplace_back(argv[i]);
