@@ -34,13 +34,14 @@ double median(std::vector<double> v) {
 
 void bench(const std::string& file, int repeats) {
   fmt::print("\n{} ({} repeats, medians)\n", file, repeats);
-  fmt::print("{:>13} {:>9} {:>10} {:>13} {:>10} {:>12} {:>9} {:>12}\n", "contact_nodes", "unknowns", "setup_s",
-             "s/increment", "newton/inc", "factor/inc", "symbolic", "P_final");
+  fmt::print("{:>13} {:>9} {:>8} {:>10} {:>13} {:>10} {:>12} {:>9} {:>12}\n", "contact_nodes", "unknowns", "system",
+             "setup_s", "s/increment", "newton/inc", "factor/inc", "symbolic", "P_final");
   for (int contact_nodes : {10, 20, 40}) {
     std::vector<double> setup, per_increment;
     double newton = 0, factor = 0, force = 0;
     long symbolic = 0;
     int unknowns = 0;
+    std::int64_t system = 0;
     for (int r = 0; r < repeats; ++r) {
       const LoadCase lc = read_load_case(file, {"mesh.contact_nodes=" + std::to_string(contact_nodes)});
       const auto t0 = std::chrono::steady_clock::now();
@@ -61,10 +62,11 @@ void bench(const std::string& file, int repeats) {
       factor = static_cast<double>(factorizations) / increments;
       symbolic = sim.symbolic_analyses();
       unknowns = sim.mesh().equations();
+      system = sim.system_unknowns();
       force = sim.contact().force;
     }
-    fmt::print("{:>13} {:>9} {:>10.3f} {:>13.4f} {:>10.2f} {:>12.2f} {:>9} {:>12.6e}\n", contact_nodes, unknowns,
-               median(setup), median(per_increment), newton, factor, symbolic, force);
+    fmt::print("{:>13} {:>9} {:>8} {:>10.3f} {:>13.4f} {:>10.2f} {:>12.2f} {:>9} {:>12.6e}\n", contact_nodes, unknowns,
+               system, median(setup), median(per_increment), newton, factor, symbolic, force);
     std::fflush(stdout);
   }
 }
