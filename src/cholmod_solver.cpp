@@ -1,4 +1,5 @@
 #include "cholmod_solver.hpp"
+#include "cholmod_common.hpp"
 
 #include <cstring>
 #include <stdexcept>
@@ -10,8 +11,7 @@
 
 namespace indentsim {
 
-struct CholmodSolver::State {
-  cholmod_common common;
+struct CholmodSolver::State : CholmodCommon {
   cholmod_sparse* matrix = nullptr;  // symmetric (lower triangle read), same pattern as the Jacobian
   cholmod_factor* factor = nullptr;
   cholmod_dense* rhs = nullptr;
@@ -22,16 +22,11 @@ struct CholmodSolver::State {
   int last_flag = 0;
   bool keep_factor = false;
 
-  State() {
-    cholmod_l_start(&common);
-    common.print = 0;
-    common.error_handler = nullptr;
-  }
+  State() = default;
   ~State() {
     if (factor) cholmod_l_free_factor(&factor, &common);
     if (matrix) cholmod_l_free_sparse(&matrix, &common);
     if (rhs) cholmod_l_free_dense(&rhs, &common);
-    cholmod_l_finish(&common);
   }
 };
 

@@ -7,23 +7,19 @@
 #include <cholmod.h>
 #include <fmt/format.h>
 
+#include "cholmod_common.hpp"
+
 namespace indentsim {
 
 // K_FF's factor lives as long as the condensation: every increment recovers u_F with it.
-struct FarFieldCondensation::FarFactor {
-  cholmod_common common;
+struct FarFieldCondensation::FarFactor : CholmodCommon {
   cholmod_sparse* matrix = nullptr;  // K_FF, lower triangle
   cholmod_factor* factor = nullptr;
 
-  FarFactor() {
-    cholmod_l_start(&common);
-    common.print = 0;
-    common.error_handler = nullptr;
-  }
+  FarFactor() = default;
   ~FarFactor() {
     if (factor) cholmod_l_free_factor(&factor, &common);
     if (matrix) cholmod_l_free_sparse(&matrix, &common);
-    cholmod_l_finish(&common);
   }
   FarFactor(const FarFactor&) = delete;
   FarFactor& operator=(const FarFactor&) = delete;
