@@ -55,7 +55,7 @@ std::size_t schur_block_columns(std::size_t far_unknowns) {
 
 FarFieldCondensation::FarFieldCondensation(const ElasticStiffness& stiffness, const ContactBoundary& contact,
                                            const NearField& near)
-    : near_(near), full_pattern_(stiffness.pattern()), full_values_(stiffness.values()) {
+    : full_pattern_(stiffness.pattern()), full_values_(stiffness.values()) {
   const Mesh& mesh = stiffness.mesh();
   const auto n = static_cast<std::size_t>(full_pattern_.size());
   const auto& colptr = full_pattern_.column_start();

@@ -61,7 +61,6 @@ public:
   FarFieldCondensation(const FarFieldCondensation&) = delete;
   FarFieldCondensation& operator=(const FarFieldCondensation&) = delete;
 
-  const NearField& near_field() const { return near_; }
   /// |R|, the unknowns each Newton iteration solves for.
   std::int64_t size() const { return pattern_->size(); }
   /// |B|, the near unknowns coupled to the far field (the dense block of K_red).
@@ -82,7 +81,6 @@ public:
 
 private:
   struct FarFactor;  // CHOLMOD's common block and the factor of K_FF
-  NearField near_;
   const StiffnessPattern& full_pattern_;
   const std::vector<double>& full_values_;
   std::vector<int> near_equation_;   // condensed unknown -> free equation
