@@ -10,6 +10,7 @@ packages=(
   libopenblas0-pthread       # BLAS for CHOLMOD's supernodal factorization (takes over libblas.so.3)
   python3 python3-matplotlib
   clang libclang-rt-14-dev   # libFuzzer targets (scripts/fuzz.sh)
+  libomp-14-dev              # OpenMP for clang: Debian's SUNDIALS CMake package requires OpenMP of the configuring compiler
 )
 
 missing=()
