@@ -7,19 +7,9 @@
 
 #include <fmt/format.h>
 
-namespace indentsim {
+#include "indentsim/file_system.hpp"
 
-void write_file_atomically(const std::filesystem::path& path, const std::string& text) {
-  const std::filesystem::path temporary = path.string() + ".tmp";
-  {
-    std::FILE* f = std::fopen(temporary.c_str(), "wb");
-    if (!f) throw std::runtime_error("cannot write " + temporary.string());
-    const bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size() && std::fflush(f) == 0;
-    std::fclose(f);
-    if (!ok) throw std::runtime_error("writing " + temporary.string() + " failed");
-  }
-  std::filesystem::rename(temporary, path);
-}
+namespace indentsim {
 
 NodalStresses average_to_nodes(const Mesh& mesh, const BulkModel& bulk) {
   NodalStresses nodal;
@@ -112,8 +102,8 @@ void data_array(std::string& out, const char* type, const char* name, int compon
 
 }  // namespace
 
-std::string vtu_document(const Mesh& mesh, const double* u, const BulkModel& bulk, const NodalStresses& nodal,
-                         const ContactBoundary& contact, const ContactResult& contact_state) {
+std::string vtu_document(const FieldFrame& frame, const Mesh& mesh, const double* u, const BulkModel& bulk,
+                         const NodalStresses& nodal, const ContactBoundary& contact, const ContactResult& contact_state) {
   const auto nodes = static_cast<std::size_t>(mesh.nodes());
   const auto cells = static_cast<std::size_t>(mesh.elements());
   const auto displacement = [&](std::size_t n, int c) {
@@ -147,6 +137,12 @@ std::string vtu_document(const Mesh& mesh, const double* u, const BulkModel& bul
   out.reserve(nodes * 200);
   out += "<?xml version=\"1.0\"?>\n";
   out += "<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n  <UnstructuredGrid>\n";
+  // The depth and the increment as field data: the series' time value is the increment (alpha
+  // repeats along a load history), and ParaView shows both per frame.
+  out += fmt::format("    <FieldData>\n      <DataArray type=\"Float64\" Name=\"alpha\" NumberOfTuples=\"1\" "
+                     "format=\"ascii\">{:.17g}</DataArray>\n      <DataArray type=\"Int32\" Name=\"step\" "
+                     "NumberOfTuples=\"1\" format=\"ascii\">{}</DataArray>\n    </FieldData>\n",
+                     frame.alpha, frame.step);
   out += fmt::format("    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n", nodes, cells);
   out += "      <PointData Vectors=\"displacement\">\n";
   data_array(out, "Float64", "displacement", 3, nodes, displacement);
@@ -184,22 +180,22 @@ FieldSeries::FieldSeries(std::filesystem::path dir) : dir_(std::move(dir)), pvd_
   std::filesystem::create_directories(dir_ / "fields");
 }
 
-void FieldSeries::add(int step, double alpha, const std::string& vtu_text) {
+void FieldSeries::add(int step, const std::string& vtu_text) {
   const std::string name = fmt::format("fields/step_{:06d}.vtu", step);
   write_file_atomically(dir_ / name, vtu_text);
-  entries_.emplace_back(alpha, name);
+  entries_.emplace_back(step, name);
   write_pvd();
 }
 
-void FieldSeries::add_existing(int, double alpha, const std::string& relative_file) {
-  entries_.emplace_back(alpha, relative_file);
+void FieldSeries::add_existing(int step, const std::string& relative_file) {
+  entries_.emplace_back(step, relative_file);
   write_pvd();
 }
 
 void FieldSeries::write_pvd() {
   std::string pvd = "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n";
   for (const auto& [time, file] : entries_)
-    pvd += fmt::format("    <DataSet timestep=\"{:.17g}\" part=\"0\" file=\"{}\"/>\n", time, file);
+    pvd += fmt::format("    <DataSet timestep=\"{}\" part=\"0\" file=\"{}\"/>\n", time, file);
   pvd += "  </Collection>\n</VTKFile>\n";
   write_file_atomically(pvd_, pvd);
 }

@@ -8,16 +8,38 @@
 
 namespace indentsim {
 
-CurveWriter::CurveWriter(const std::filesystem::path& file) : file_(std::fopen(file.c_str(), "w")) {
-  if (!file_) throw std::runtime_error("cannot write " + file.string());
-  const std::string h = header() + "\n";
-  std::fputs(h.c_str(), file_);
-  std::fflush(file_);
+namespace {
+
+/// A JSON string literal of `text` (quotes, backslashes and control characters escaped).
+std::string json_string(const std::string& text) {
+  std::string out = "\"";
+  for (unsigned char c : text) {
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += static_cast<char>(c);
+    } else if (c < 0x20) {
+      out += fmt::format("\\u{:04x}", c);
+    } else {
+      out += static_cast<char>(c);
+    }
+  }
+  return out + "\"";
 }
 
-CurveWriter::~CurveWriter() {
-  if (file_) std::fclose(file_);
+}  // namespace
+
+std::string to_string(RunStatus status) {
+  switch (status) {
+    case RunStatus::running: return "running";
+    case RunStatus::finished: return "finished";
+    case RunStatus::not_converged: return "not_converged";
+    case RunStatus::stopped: return "stopped";
+    case RunStatus::failed: return "failed";
+  }
+  return "?";
 }
+
+CurveWriter::CurveWriter(const std::filesystem::path& file) : file_(file) { file_.append(header() + "\n"); }
 
 std::string CurveWriter::header() {
   return "step,alpha,P,a,contact_nodes,newton_iters,factorizations,cutbacks,plastic_points,max_strain_intensity,"
@@ -31,11 +53,7 @@ std::string CurveWriter::format(const IncrementRecord& r) {
                      r.plastic_points, r.max_strain_intensity, r.wall_seconds);
 }
 
-void CurveWriter::write(const IncrementRecord& record) {
-  const std::string line = format(record) + "\n";
-  if (std::fputs(line.c_str(), file_) < 0 || std::fflush(file_) != 0)
-    throw std::runtime_error("writing curve.csv failed");
-}
+void CurveWriter::write(const IncrementRecord& record) { file_.append(format(record) + "\n"); }
 
 void LoadHistorySummary::add(const IncrementRecord& r, double free_surface_depth) {
   if (r.force > peak_force_) peak_force_ = r.force;
@@ -71,10 +89,12 @@ void LoadHistorySummary::add(const IncrementRecord& r, double free_surface_depth
   previous_ = r;
 }
 
-std::string LoadHistorySummary::json(const std::string& model) const {
-  std::string out = fmt::format("{{\n  \"model\": \"{}\",\n  \"increments\": {},\n  \"peak_depth\": {:.17g},\n"
-                                "  \"peak_force\": {:.17g},\n  \"unloading\": [",
-                                model, previous_ ? previous_->step : 0, peak_depth_, peak_force_);
+std::string LoadHistorySummary::json(const std::string& model, RunStatus status, const std::string& message) const {
+  std::string out = fmt::format("{{\n  \"status\": \"{}\",\n", to_string(status));
+  if (!message.empty()) out += fmt::format("  \"message\": {},\n", json_string(message));
+  out += fmt::format("  \"model\": \"{}\",\n  \"increments\": {},\n  \"peak_depth\": {:.17g},\n"
+                     "  \"peak_force\": {:.17g},\n  \"unloading\": [",
+                     model, previous_ ? previous_->step : 0, peak_depth_, peak_force_);
   for (std::size_t i = 0; i < unloadings_.size(); ++i) {
     const Unloading& u = unloadings_[i];
     out += fmt::format("{}\n    {{\"step\": {}, \"depth\": {:.17g}, \"force\": {:.17g}, \"stiffness\": {:.17g}, "
@@ -98,6 +118,7 @@ RunOutput::RunOutput(const std::filesystem::path& dir, const LoadCase& load_case
       curve_(dir / "curve.csv"),
       fields_(dir) {
   write_file_atomically(dir_ / "case.toml", to_toml(load_case));
+  write_file_atomically(dir_ / "summary.json", summary_.json(model_, RunStatus::running, ""));
   for (std::size_t k = 0; k < replay_curve.size(); ++k) {
     const IncrementRecord& r = replay_curve[k];
     curve_.write(r);
@@ -108,7 +129,7 @@ RunOutput::RunOutput(const std::filesystem::path& dir, const LoadCase& load_case
     // Fields written before the interruption stay in the series.
     const std::string vtu = fmt::format("fields/step_{:06d}.vtu", r.step);
     if (std::filesystem::exists(dir_ / vtu)) {
-      fields_.add_existing(r.step, r.alpha, vtu);
+      fields_.add_existing(r.step, vtu);
       last_fields_step_ = r.step;
     }
   }
@@ -126,21 +147,35 @@ void RunOutput::increment(const Simulation& sim, const IncrementRecord& record) 
 
 void RunOutput::write_fields(const Simulation& sim, int step) {
   const NodalStresses nodal = average_to_nodes(sim.mesh(), sim.bulk());
-  fields_.add(step, sim.alpha(),
-              vtu_document(sim.mesh(), sim.displacement().data(), sim.bulk(), nodal, sim.contact_boundary(),
+  fields_.add(step, vtu_document(FieldFrame{step, sim.alpha()}, sim.mesh(), sim.displacement().data(), sim.bulk(), nodal, sim.contact_boundary(),
                            sim.contact()));
   last_fields_step_ = step;
 }
 
-void RunOutput::finish(const Simulation& sim) {
-  if (last_step_ < 0) return;
-  if (last_fields_step_ != last_step_) write_fields(sim, last_step_);
-  const auto& mesh = sim.mesh();
-  const auto layer = nodal_layer_forces(mesh, sim.bulk());
-  write_file_atomically(dir_ / "layers.csv", layers_csv(layer_forces(mesh, layer), sim.contact().force));
-  write_file_atomically(dir_ / "summary.json", summary_.json(model_));
-  write_file_atomically(dir_ / "profiles.csv", profiles_csv(mesh, profile_lines(mesh, profile_depths_), layer,
-                                                           average_to_nodes(mesh, sim.bulk())));
+void RunOutput::finish(const Simulation& sim, RunStatus status, const std::string& message) {
+  if (last_step_ >= 0) {
+    if (last_fields_step_ != last_step_) write_fields(sim, last_step_);
+    const auto& mesh = sim.mesh();
+    const auto layer = nodal_layer_forces(mesh, sim.bulk());
+    write_file_atomically(dir_ / "layers.csv", layers_csv(layer_forces(mesh, layer), sim.contact().force));
+    write_file_atomically(dir_ / "profiles.csv", profiles_csv(mesh, profile_lines(mesh, profile_depths_), layer,
+                                                             average_to_nodes(mesh, sim.bulk())));
+  }
+  write_file_atomically(dir_ / "summary.json", summary_.json(model_, status, message));
+}
+
+void RunOutput::fail(const std::string& message) noexcept {
+  try {
+    // On a full disk the temporary files are what is left to free first.
+    std::error_code ec;
+    for (const auto& folder : {dir_, dir_ / "fields", dir_ / "checkpoints"})
+      for (const auto& entry : std::filesystem::directory_iterator(folder, ec))
+        if (entry.path().extension() == ".tmp") std::filesystem::remove(entry.path(), ec);
+    write_file_atomically(dir_ / "summary.json", summary_.json(model_, RunStatus::failed, message));
+  } catch (...) {
+    // summary.json still says "running", and no process holds the folder: readers see a run that
+    // did not finish.
+  }
 }
 
 }  // namespace indentsim

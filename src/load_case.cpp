@@ -85,7 +85,8 @@ const std::vector<SectionSpec>& schema() {
         {"fine_depth", false}, {"growth", false}, {"element", false}}},
       {"output",
        false,
-       {{"dir", false}, {"fields_every", false}, {"profile_depths", false}, {"checkpoint_every", false}}},
+       {{"dir", false}, {"fields_every", false}, {"profile_depths", false}, {"checkpoint_every", false},
+        {"keep_checkpoints", false}}},
       {"solver", false, {{"tolerance", false}, {"max_newton", false}, {"max_cutbacks", false}, {"linear", false},
                               {"far_field", false}, {"jacobian", false}}},
   };
@@ -312,6 +313,15 @@ LoadCase from_table(const toml::table& root, const std::string& source) {
   r.read_integer("output", "fields_every", lc.output.fields_every);
   r.read_number_array("output", "profile_depths", lc.output.profile_depths);
   r.read_integer("output", "checkpoint_every", lc.output.checkpoint_every);
+  if (const toml::node* keep = r.find("output", "keep_checkpoints"); keep && keep->is_string()) {
+    if (keep->value_exact<std::string>() != "all")
+      r.fail("output.keep_checkpoints", "must be a count >= 1 or \"all\"");
+    lc.output.keep_checkpoints = 0;
+  } else {
+    r.read_integer("output", "keep_checkpoints", lc.output.keep_checkpoints);
+    if (keep && lc.output.keep_checkpoints < 1)
+      r.fail("output.keep_checkpoints", fmt::format("must be a count >= 1 or \"all\" (got {})", lc.output.keep_checkpoints));
+  }
 
   r.read_number("solver", "tolerance", lc.solver.tolerance);
   r.read_choice("solver", "linear", linear_names, lc.solver.linear);
@@ -435,9 +445,11 @@ std::string to_toml(const LoadCase& lc) {
   toml::table dir_table{{"dir", lc.output.dir}};
   std::ostringstream dir_line;
   dir_line << dir_table;
-  t += fmt::format("\n[output]\n{}\nfields_every = {}\nprofile_depths = {}\ncheckpoint_every = {}\n\n",
+  t += fmt::format("\n[output]\n{}\nfields_every = {}\nprofile_depths = {}\ncheckpoint_every = {}\n"
+                   "keep_checkpoints = {}\n\n",
                    dir_line.str(), lc.output.fields_every, numbers(lc.output.profile_depths),
-                   lc.output.checkpoint_every);
+                   lc.output.checkpoint_every,
+                   lc.output.keep_checkpoints == 0 ? std::string("\"all\"") : std::to_string(lc.output.keep_checkpoints));
   t += fmt::format("[solver]\ntolerance = {:.17g}\nmax_newton = {}\nmax_cutbacks = {}\nlinear = \"{}\"\n"
                    "far_field = \"{}\"\njacobian = \"{}\"\n",
                    lc.solver.tolerance, lc.solver.max_newton, lc.solver.max_cutbacks,

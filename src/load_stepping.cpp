@@ -53,6 +53,13 @@ std::vector<double> plan_increments(const LoadInput& load) {
   return alphas;
 }
 
+std::vector<int> reversal_steps(const std::vector<double>& targets) {
+  std::vector<int> steps;
+  for (std::size_t k = 1; k + 1 < targets.size(); ++k)
+    if ((targets[k] - targets[k - 1]) * (targets[k + 1] - targets[k]) < 0.0) steps.push_back(static_cast<int>(k));
+  return steps;
+}
+
 void extrapolate(const std::vector<double>& u_previous, double alpha_previous, const std::vector<double>& u_current,
                  double alpha_current, double alpha_next, std::vector<double>& guess) {
   guess = u_current;

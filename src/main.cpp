@@ -1,7 +1,8 @@
 // indentsim: the command line.  Thin glue over the library: read a load case (or a checkpoint),
 // run it, write the outputs.  Exit status: 0 success, 2 bad input (nothing written), 3 the solver
-// could not converge (converged increments are kept), 128 + signal when stopped by SIGINT or
-// SIGTERM (after checkpointing), 1 anything else.
+// could not converge (converged increments are kept), 4 a file could not be written or read (the
+// operating system's reason is printed; the folder is marked failed), 128 + signal when stopped
+// by SIGINT or SIGTERM (after checkpointing), 1 anything else.
 #include <algorithm>
 #include <chrono>
 #include <csignal>
@@ -19,6 +20,7 @@
 #include "indentsim/error.hpp"
 #include "indentsim/io.hpp"
 #include "indentsim/load_case.hpp"
+#include "indentsim/run_folder.hpp"
 #include "indentsim/simulation.hpp"
 
 namespace fs = std::filesystem;
@@ -28,6 +30,7 @@ namespace {
 
 constexpr int exit_bad_input = 2;
 constexpr int exit_not_converged = 3;
+constexpr int exit_io_failure = 4;
 
 /// A TOML basic string holding `s`, for passing a path through --set.
 std::string toml_string(const std::string& s) {
@@ -37,16 +40,6 @@ std::string toml_string(const std::string& s) {
     quoted += c;
   }
   return quoted + "\"";
-}
-
-fs::path prepare_output_dir(const LoadCase& lc) {
-  const fs::path dir = lc.output.dir;
-  std::error_code ec;
-  if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
-    throw InputError(lc.source, "output.dir", fmt::format("\"{}\" exists and is not a folder", dir.string()));
-  fs::create_directories(dir, ec);
-  if (ec) throw InputError(lc.source, "output.dir", fmt::format("cannot create \"{}\": {}", dir.string(), ec.message()));
-  return dir;
 }
 
 /// The progress line on stderr for runs longer than a moment: increment k of N, alpha, P, Newton
@@ -115,6 +108,7 @@ void print_mesh(const Simulation& sim) {
 
 int command_check(const std::string& file, const std::vector<std::string>& overrides) {
   const LoadCase lc = read_load_case(file, overrides);
+  inspect_output_dir(lc.output.dir, lc.source);
   const MeshPlan p = plan_mesh(lc);
   fmt::print("{}: valid; model {}, depth up to {:.4g} m in {} increments; mesh {} x {} nodes ({} unknowns)\n", file,
              to_string(lc.material.model), lc.max_depth(), lc.load.increments, p.nodes_x, p.nodes_y, p.unknowns());
@@ -129,10 +123,12 @@ struct Interrupted {
 };
 
 /// Steps the simulation to the end of its load path, writing outputs and checkpoints; on
-/// SIGINT/SIGTERM it checkpoints after the increment in progress and stops cleanly.
+/// SIGINT/SIGTERM it checkpoints after the increment in progress and stops cleanly.  Ends the
+/// folder's summary.json with the run's status, "failed" with the message on an I/O error.
 int drive(Simulation& sim, RunOutput& output, const std::string& label, bool quiet) {
   const LoadCase& lc = sim.load_case();
   const fs::path checkpoint_dir = fs::path(lc.output.dir) / "checkpoints";
+  const CheckpointSchedule schedule = CheckpointSchedule::of(lc);
   std::signal(SIGINT, on_stop_signal);
   std::signal(SIGTERM, on_stop_signal);
   Progress progress(static_cast<int>(plan_increments(lc.load).size()) - 1, quiet);
@@ -143,48 +139,69 @@ int drive(Simulation& sim, RunOutput& output, const std::string& label, bool qui
       fmt::print(stderr, "warning: {}\n", sim.warnings()[warnings_shown]);
     }
   };
+  int last_checkpoint = output.records().empty() ? -1 : output.records().back().step;
   const auto checkpoint = [&] {
-    return save_checkpoint(checkpoint_dir, make_checkpoint(sim, output.records(), output.free_surface_depths()));
+    last_checkpoint = output.records().back().step;
+    return save_checkpoint(checkpoint_dir, make_checkpoint(sim, output.records(), output.free_surface_depths()),
+                           schedule);
   };
-  int exit_code = 0;
-  int since_checkpoint = 0;
   try {
-    sim.run([&](const IncrementRecord& r) {
-      output.increment(sim, r);
-      inject_fault("increment");
-      show_warnings();
-      progress.update(r);
-      if (lc.output.checkpoint_every > 0 && ++since_checkpoint >= lc.output.checkpoint_every) {
-        checkpoint();
-        since_checkpoint = 0;
-      }
-      if (stop_signal) throw Interrupted{stop_signal};
-    });
-    if (lc.output.checkpoint_every > 0 && since_checkpoint > 0) checkpoint();
-  } catch (const SolverError& e) {
-    progress.clear_line();
-    fmt::print(stderr, "{}: {}\n", label, e.what());
-    exit_code = exit_not_converged;
-  } catch (const Interrupted& i) {
-    progress.clear_line();
-    const fs::path file = checkpoint();
-    fmt::print(stderr, "{}: stopped by signal {} after increment {}; resume with: indentsim resume {}\n", label,
-               i.signal, output.records().back().step, file.string());
-    exit_code = 128 + i.signal;
-  }
-  progress.finish();
-  output.finish(sim);
-  show_warnings();
-  if (!quiet) {
-    if (sim.near_field_growths() > 0) {
-      fmt::print("the near field grew {} time(s) during the run; ", sim.near_field_growths());
-      describe_near_field(sim);
+    int exit_code = 0;
+    RunStatus status = RunStatus::finished;
+    std::string message;
+    try {
+      sim.run([&](const IncrementRecord& r) {
+        output.increment(sim, r);
+        inject_fault("increment");
+        show_warnings();
+        progress.update(r);
+        if (schedule.due(r.step)) checkpoint();
+        if (stop_signal) throw Interrupted{stop_signal};
+      });
+      if (lc.output.checkpoint_every > 0 && last_checkpoint != output.records().back().step) checkpoint();
+    } catch (const SolverError& e) {
+      progress.clear_line();
+      fmt::print(stderr, "{}: {}\n", label, e.what());
+      exit_code = exit_not_converged;
+      status = RunStatus::not_converged;
+      message = e.what();
+    } catch (const Interrupted& i) {
+      progress.clear_line();
+      const fs::path file = checkpoint();
+      fmt::print(stderr, "{}: stopped by signal {} after increment {}; resume with: indentsim resume {}\n", label,
+                 i.signal, output.records().back().step, file.string());
+      exit_code = 128 + i.signal;
+      status = RunStatus::stopped;
+      message = fmt::format("stopped by signal {}; resume with: indentsim resume {}", i.signal, file.string());
     }
-    fmt::print("largest condition estimate of a Newton matrix: {:.3g} ({})\n", sim.largest_condition_estimate(),
-               sim.linear_solver() == LinearSolverKind::cholmod ? "CHOLMOD 1/rcond" : "KLU condest");
-    fmt::print("P-alpha curve: {}\n", output.curve_path().string());
+    progress.finish();
+    output.finish(sim, status, message);
+    show_warnings();
+    if (!quiet) {
+      if (sim.near_field_growths() > 0) {
+        fmt::print("the near field grew {} time(s) during the run; ", sim.near_field_growths());
+        describe_near_field(sim);
+      }
+      fmt::print("largest condition estimate of a Newton matrix: {:.3g} ({})\n", sim.largest_condition_estimate(),
+                 sim.linear_solver() == LinearSolverKind::cholmod ? "CHOLMOD 1/rcond" : "KLU condest");
+      fmt::print("P-alpha curve: {}\n", output.curve_path().string());
+    }
+    return exit_code;
+  } catch (const IoError& e) {
+    progress.clear_line();
+    output.fail(e.what());
+    fmt::print(stderr, "error: {}\n", e.what());
+    return exit_io_failure;
+  } catch (const std::filesystem::filesystem_error& e) {
+    progress.clear_line();
+    output.fail(e.what());
+    fmt::print(stderr, "error: {}\n", e.what());
+    return exit_io_failure;
+  } catch (const std::exception& e) {
+    progress.clear_line();
+    output.fail(e.what());
+    throw;
   }
-  return exit_code;
 }
 
 int command_run(const std::string& file, const std::vector<std::string>& overrides, const std::string& out,
@@ -192,34 +209,61 @@ int command_run(const std::string& file, const std::vector<std::string>& overrid
   std::vector<std::string> all = overrides;
   if (!out.empty()) all.push_back("output.dir=" + toml_string(out));
   LoadCase lc = read_load_case(file, all);
+  RunFolder folder(lc.output.dir, lc.source);  // one run per folder: locked before anything is solved
   Simulation sim(lc);  // validates the mesh size before anything is written
   if (!quiet) print_mesh(sim);
-  RunOutput output(prepare_output_dir(lc), lc);
+  folder.clear_earlier_run();
+  RunOutput output(folder.dir(), lc);
   return drive(sim, output, file, quiet);
 }
 
-/// A checkpoint file, or a folder of them (the newest is taken).
-fs::path find_checkpoint(const std::string& argument) {
-  std::error_code ec;
-  if (!fs::is_directory(argument, ec)) return argument;
-  std::vector<fs::path> found;
-  for (const auto& entry : fs::directory_iterator(argument, ec))
-    if (entry.path().extension() == ".ck") found.push_back(entry.path());
-  if (found.empty()) throw InputError(argument, "checkpoint", "is a folder without checkpoint_*.ck files");
-  return *std::max_element(found.begin(), found.end());
+int command_list_checkpoints(const std::string& argument) {
+  const auto listing = list_checkpoints(argument);
+  if (listing.empty()) throw InputError(argument, "checkpoint", "is a folder without checkpoint_*.ck files");
+  fmt::print("{:<28} {:>8} {:>14} {:>14}  note\n", "checkpoint", "step", "alpha [m]", "P");
+  for (const auto& c : listing) {
+    std::string note = c.problem.empty() ? (c.reversal ? "reversal of the load path" : "") : "cannot resume: " + c.problem;
+    if (c.problem.empty() && !c.of_the_folders_run) note = "of another run than the folder's case.toml";
+    if (c.problem.empty())
+      fmt::print("{:<28} {:>8} {:>14.6g} {:>14.6g}  {}\n", c.file.filename().string(), c.step, c.alpha, c.force, note);
+    else
+      fmt::print("{:<28} {:>8} {:>14} {:>14}  {}\n", c.file.filename().string(), "-", "-", "-", note);
+  }
+  return 0;
 }
 
 int command_resume(const std::string& argument, const std::vector<std::string>& overrides, const std::string& out,
                    bool quiet) {
-  const fs::path file = find_checkpoint(argument);
+  const fs::path file = choose_checkpoint(argument);
   const Checkpoint checkpoint = read_checkpoint(file);
   std::vector<std::string> all = overrides;
   if (!out.empty()) all.push_back("output.dir=" + toml_string(out));
   ResumedRun run = resume_from(checkpoint, file.string(), all);  // everything checked before writing
-  if (!quiet)
-    fmt::print("resuming {} after increment {} (alpha = {:.6g} m)\n", file.string(), checkpoint.curve.back().step,
-               checkpoint.state.alpha);
-  RunOutput output(prepare_output_dir(run.load_case), run.load_case, checkpoint.curve, checkpoint.free_surface_depths);
+  const LoadCase stored = parse_load_case(checkpoint.load_case_toml, file.string());
+  const fs::path dir = run.load_case.output.dir;
+  std::error_code ec;
+  const bool in_place = fs::equivalent(dir, stored.output.dir, ec);
+  if (in_place) {
+    // Continuing in the run's own folder is for a plain continuation only: a branch (another load
+    // path) must never overwrite the run it branches from.
+    if (!same_run(stored, run.load_case))
+      throw InputError(file.string(), "--out",
+                       fmt::format("a branch (another load path) is a new run: give it its own folder with --out; "
+                                   "\"{}\" is left as it is",
+                                   dir.string()));
+    if (fs::is_regular_file(dir / "case.toml", ec)) {
+      const LoadCase folder_case = read_load_case(dir / "case.toml");
+      if (!same_run(folder_case, run.load_case))
+        throw InputError(file.string(), "--out",
+                         fmt::format("\"{}\" now holds another run; give the continuation its own folder with --out",
+                                     dir.string()));
+    }
+  }
+  RunFolder folder(dir, file.string());
+  const int step = checkpoint.curve.back().step;
+  if (!quiet) fmt::print("resuming {} after increment {} (alpha = {:.6g} m)\n", file.string(), step, checkpoint.state.alpha);
+  folder.clear_earlier_run(in_place ? std::optional<int>(step) : std::nullopt);
+  RunOutput output(folder.dir(), run.load_case, checkpoint.curve, checkpoint.free_surface_depths);
   return drive(*run.simulation, output, file.string(), quiet);
 }
 
@@ -239,8 +283,11 @@ int main(int argc, char** argv) {
   run->add_option("--set", overrides, "override a key: section.key=value")->take_all();
   run->add_flag("--quiet,-q", quiet, "print nothing but warnings and errors (no progress line)");
 
-  CLI::App* resume = app.add_subcommand("resume", "continue a run from a checkpoint (file, or folder: the newest)");
-  resume->add_option("checkpoint", file, "checkpoint file or folder")->required();
+  bool list = false;
+  CLI::App* resume = app.add_subcommand(
+      "resume", "continue a run from a checkpoint (a file, or a run folder: its own newest checkpoint)");
+  resume->add_option("checkpoint", file, "checkpoint file, run folder or checkpoints folder")->required();
+  resume->add_flag("--list", list, "list the folder's checkpoints (step, alpha, P) and exit");
   resume->add_option("--out", out, "output folder (default: the run's own)");
   resume->add_option("--set", overrides, "override a key, e.g. load.path=... to branch")->take_all();
   resume->add_flag("--quiet,-q", quiet, "print nothing but warnings and errors (no progress line)");
@@ -260,11 +307,17 @@ int main(int argc, char** argv) {
 
   try {
     if (run->parsed()) return command_run(file, overrides, out, quiet);
-    if (resume->parsed()) return command_resume(file, overrides, out, quiet);
+    if (resume->parsed()) return list ? command_list_checkpoints(file) : command_resume(file, overrides, out, quiet);
     return command_check(file, overrides);
   } catch (const InputError& e) {
     fmt::print(stderr, "error: {}\n", e.what());
     return exit_bad_input;
+  } catch (const IoError& e) {
+    fmt::print(stderr, "error: {}\n", e.what());
+    return exit_io_failure;
+  } catch (const std::filesystem::filesystem_error& e) {
+    fmt::print(stderr, "error: {}\n", e.what());
+    return exit_io_failure;
   } catch (const std::exception& e) {
     fmt::print(stderr, "error: {}\n", e.what());
     return 1;

@@ -6,7 +6,9 @@
 Runs a small plastic case with fields at every increment, then checks that
   - every VTU is well-formed XML of the VTK UnstructuredGrid format with array sizes matching
     the mesh (points = nx * ny from the coordinates themselves, cells = (nx-1)(ny-1), quads),
-  - fields.pvd lists exactly those files with alpha from curve.csv as time,
+  - fields.pvd lists exactly those files with the increment as time (strictly increasing, also
+    along loadcases/load_unload.toml where alpha returns to 0), each VTU carrying its alpha and
+    step as field data,
   - layers.csv and profiles.csv have the promised columns and rows,
   - plots/plot_results.py writes non-empty PNG and SVG figures.
 Prints 'N passed, N failed' and exits non-zero on any failure.
@@ -66,6 +68,12 @@ def check_vtu(path):
     check(types == [9] * cells, f"{path.name}: cell types are not all VTK_QUAD")
 
 
+def field_data(path):
+    """(alpha, step) from a VTU's FieldData."""
+    arrays = data_arrays(ET.parse(path).getroot().find("UnstructuredGrid").find("FieldData"))
+    return float(arrays["alpha"].text), int(arrays["step"].text)
+
+
 def main():
     executable, source = pathlib.Path(sys.argv[1]), pathlib.Path(sys.argv[2])
     with tempfile.TemporaryDirectory() as tmp:
@@ -85,11 +93,25 @@ def main():
         datasets = collection.find("Collection").findall("DataSet")
         check(len(datasets) == len(curve), f"fields.pvd lists {len(datasets)} data sets for {len(curve)} increments")
         for dataset, row in zip(datasets, curve):
-            check(abs(float(dataset.get("timestep")) - float(row["alpha"])) <= 1e-15, "pvd time is not alpha")
+            check(int(dataset.get("timestep")) == int(row["step"]), "pvd time is not the increment")
             vtu = out / dataset.get("file")
             check(vtu.is_file(), f"{vtu} listed but missing")
             if vtu.is_file():
                 check_vtu(vtu)
+                check(field_data(vtu) == (float(row["alpha"]), int(row["step"])), f"{vtu.name}: alpha/step field data")
+
+        # A load-unload-reload history: alpha = 0 three times, the series still plays in order.
+        history = pathlib.Path(tmp) / "history"
+        run = subprocess.run([str(executable), "run", str(source / "loadcases" / "load_unload.toml"), "--quiet",
+                              "--out", str(history), "--set", "mesh.contact_nodes=6", "--set", "output.fields_every=1"],
+                             capture_output=True, text=True)
+        check(run.returncode == 0, f"indentsim run of load_unload.toml failed: {run.stderr}")
+        with open(history / "curve.csv", newline="") as f:
+            rows = list(csv.DictReader(f))
+        times = [int(d.get("timestep")) for d in ET.parse(history / "fields.pvd").getroot().find("Collection")]
+        check(times == [int(r["step"]) for r in rows], "load_unload: one pvd entry per increment, in order")
+        check(all(b > a for a, b in zip(times, times[1:])), "load_unload: pvd times not strictly increasing")
+        check(sum(1 for r in rows if float(r["alpha"]) == 0.0) >= 2, "load_unload: the path returns to alpha = 0")
 
         with open(out / "layers.csv", newline="") as f:
             layers = list(csv.DictReader(f))

@@ -1,6 +1,9 @@
 #pragma once
 // Helpers shared by the tests: load cases from the repository, and small edits of them.
+#include <sys/wait.h>
 #include <unistd.h>
+
+#include <cstdlib>
 
 #include <filesystem>
 #include <fstream>
@@ -52,6 +55,23 @@ inline std::string slurp(const std::filesystem::path& p) {
   s << in.rdbuf();
   return s.str();
 }
+
+/// A temporary folder and the CLI run in it: cli() returns the exit status (128 + signal when a
+/// signal ended it), out() and err() what it printed.  `environment` is prefixed to the command
+/// (e.g. "INDENTSIM_FAULT=write:5").
+class CliTest : public TempDirTest {
+protected:
+  int cli(const std::string& args, const std::string& environment = "") {
+    const std::string command = (environment.empty() ? "" : environment + " ") + std::string(INDENTSIM_CLI) + " " +
+                                args + " >" + (dir_ / "out.txt").string() + " 2>" + (dir_ / "err.txt").string() +
+                                " </dev/null";
+    const int raw = std::system(command.c_str());
+    if (WIFEXITED(raw)) return WEXITSTATUS(raw);
+    return WIFSIGNALED(raw) ? 128 + WTERMSIG(raw) : -1;
+  }
+  std::string out() const { return slurp(dir_ / "out.txt"); }
+  std::string err() const { return slurp(dir_ / "err.txt"); }
+};
 
 inline std::string source_path(const std::string& relative) { return std::string(INDENTSIM_SOURCE_DIR) + "/" + relative; }
 

@@ -18,6 +18,18 @@ private:
   std::string file_, key_, problem_;
 };
 
+/// A file that could not be read or written: names the file and the operating system's reason
+/// ("No space left on device", "Permission denied", ...).  The CLI exits with status 4.
+class IoError : public std::runtime_error {
+public:
+  IoError(std::string file, std::string action, std::string reason);
+  const std::string& file() const { return file_; }
+  const std::string& reason() const { return reason_; }
+
+private:
+  std::string file_, reason_;
+};
+
 /// A nonlinear solve that could not be completed (after every allowed cutback).
 class SolverError : public std::runtime_error {
 public:

@@ -3,7 +3,7 @@
 //  - layers.csv   the paper's layer forces P^-(y_j), P^+(y_j) on every horizontal mesh line;
 //  - profiles.csv sigma_N, sigma_T from the layer forces along the top surface and chosen depths,
 //                 next to the Gauss-point stresses extrapolated and averaged to the nodes;
-//  - fields/step_NNNNNN.vtu + fields.pvd  ParaView files (a time series over alpha).
+//  - fields/step_NNNNNN.vtu + fields.pvd  ParaView files (a time series over the increments).
 // Every file is written to a temporary name and renamed, so a reader never sees half a file.
 #include <array>
 #include <filesystem>
@@ -24,9 +24,6 @@ struct NodalStresses {
 };
 NodalStresses average_to_nodes(const Mesh& mesh, const BulkModel& bulk);
 
-/// Writes `text` to `path` atomically (temporary file, flush, rename).
-void write_file_atomically(const std::filesystem::path& path, const std::string& text);
-
 std::string layers_csv(const std::vector<LayerForce>& layers, double punch_force);
 
 /// Mesh lines of the profiles: the top surface and, for each depth, the nearest mesh line.
@@ -34,23 +31,31 @@ std::vector<int> profile_lines(const Mesh& mesh, const std::vector<double>& dept
 std::string profiles_csv(const Mesh& mesh, const std::vector<int>& lines, const std::vector<NodalLayerForces>& layer,
                          const NodalStresses& nodal);
 
-/// A VTK XML unstructured grid of the current state.
-std::string vtu_document(const Mesh& mesh, const double* u, const BulkModel& bulk, const NodalStresses& nodal,
-                         const ContactBoundary& contact, const ContactResult& contact_state);
+/// Which state a VTU shows: the increment and its depth (written as the file's field data).
+struct FieldFrame {
+  int step = 0;
+  double alpha = 0.0;
+};
 
-/// Keeps DIR/fields.pvd listing every VTU written so far, with alpha as the time value.
+/// A VTK XML unstructured grid of the current state.
+std::string vtu_document(const FieldFrame& frame, const Mesh& mesh, const double* u, const BulkModel& bulk,
+                         const NodalStresses& nodal, const ContactBoundary& contact, const ContactResult& contact_state);
+
+/// Keeps DIR/fields.pvd listing every VTU written so far.  The time value of each is the
+/// increment number, which grows strictly along a run: the depth alpha does not (a load history
+/// returns to alpha = 0), so it is field data of each VTU instead.
 class FieldSeries {
 public:
   explicit FieldSeries(std::filesystem::path dir);
-  void add(int step, double alpha, const std::string& vtu_text);
+  void add(int step, const std::string& vtu_text);
   /// Lists a VTU already on disk (a resumed run keeps the fields written before).
-  void add_existing(int step, double alpha, const std::string& relative_file);
+  void add_existing(int step, const std::string& relative_file);
   const std::filesystem::path& pvd_path() const { return pvd_; }
 
 private:
   void write_pvd();
   std::filesystem::path dir_, pvd_;
-  std::vector<std::pair<double, std::string>> entries_;
+  std::vector<std::pair<int, std::string>> entries_;
 };
 
 }  // namespace indentsim

@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "indentsim/fields.hpp"
+#include "indentsim/file_system.hpp"
 #include "indentsim/load_stepping.hpp"
 
 namespace indentsim {
@@ -17,17 +18,21 @@ namespace indentsim {
 class CurveWriter {
 public:
   explicit CurveWriter(const std::filesystem::path& file);
-  ~CurveWriter();
-  CurveWriter(const CurveWriter&) = delete;
-  CurveWriter& operator=(const CurveWriter&) = delete;
 
   void write(const IncrementRecord& record);
   static std::string header();
   static std::string format(const IncrementRecord& record);
 
 private:
-  std::FILE* file_ = nullptr;
+  AppendedFile file_;
 };
+
+/// How a run ended, as summary.json says in "status": "running" from its first write until it
+/// ends (so a folder whose run was killed says "running" while no process holds its lock),
+/// then "finished", "not_converged" (exit 3), "stopped" (a signal; resumable) or "failed" (an
+/// I/O or other error, with the message).
+enum class RunStatus { running, finished, not_converged, stopped, failed };
+std::string to_string(RunStatus status);
 
 class Simulation;
 
@@ -48,7 +53,7 @@ public:
 
   /// Feed every converged increment in order, with Simulation::free_surface_depth() at it.
   void add(const IncrementRecord& record, double free_surface_depth);
-  std::string json(const std::string& model) const;
+  std::string json(const std::string& model, RunStatus status, const std::string& message) const;
   const std::vector<Unloading>& unloadings() const { return unloadings_; }
   double peak_depth() const { return peak_depth_; }
   double peak_force() const { return peak_force_; }
@@ -65,14 +70,21 @@ private:
 ///   curve.csv      one row per converged increment (CurveWriter);
 ///   fields.pvd, fields/step_*.vtu   every output.fields_every increments and the final state;
 ///   layers.csv, profiles.csv        the paper's layer view of the final state;
-///   summary.json   peak, unloading stiffness and residual depth of each unloading branch.
+///   summary.json   the run's status; peak, unloading stiffness and residual depth of each
+///                  unloading branch.
+/// The folder is expected to be held (RunFolder) and cleared of an earlier run's files.
 class RunOutput {
 public:
   /// `replay_curve`/`replay_depths`: the rows of a run being resumed, written again first.
   RunOutput(const std::filesystem::path& dir, const LoadCase& load_case,
             const std::vector<IncrementRecord>& replay_curve = {}, const std::vector<double>& replay_depths = {});
   void increment(const Simulation& sim, const IncrementRecord& record);
-  void finish(const Simulation& sim);
+  /// Writes the final state's fields, the layer view and summary.json with `status` (not
+  /// "failed": use fail()).
+  void finish(const Simulation& sim, RunStatus status, const std::string& message = "");
+  /// Marks the folder as a failed run (summary.json "failed" with `message`), as far as the file
+  /// system still allows; never throws.
+  void fail(const std::string& message) noexcept;
   std::filesystem::path curve_path() const { return dir_ / "curve.csv"; }
   const std::vector<IncrementRecord>& records() const { return records_; }
   const std::vector<double>& free_surface_depths() const { return depths_; }

@@ -54,6 +54,7 @@ struct OutputInput {
   int fields_every = 0;     ///< VTU every N increments (0: the final state only)
   std::vector<double> profile_depths;  ///< depths [m] of the stress profiles besides the surface
   int checkpoint_every = 10;  ///< checkpoint every N increments and at the end (0: only on SIGINT/SIGTERM)
+  int keep_checkpoints = 2;   ///< newest checkpoints kept besides every reversal's (0 = "all")
 };
 
 enum class LinearSolverChoice { automatic, klu, cholmod };

@@ -13,6 +13,10 @@ std::vector<double> plan_increments(const std::vector<double>& path, int increme
 /// The same, honouring per-segment counts when the load case gives them.
 std::vector<double> plan_increments(const LoadInput& load);
 
+/// The planned increments (indices into `targets`) where the load path reverses: every peak and
+/// every valley strictly inside the path.
+std::vector<int> reversal_steps(const std::vector<double>& targets);
+
 /// One converged increment, as written to curve.csv.
 struct IncrementRecord {
   int step = 0;               ///< 0 = the unloaded initial state
