@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <csignal>
 #include <cstring>
 #include <fstream>
@@ -125,6 +126,48 @@ IncrementRecord read_record(ByteReader& in) {
   return r;
 }
 
+/// The content of a checkpoint whose checksum holds (it may have been recomputed after an edit):
+/// every number finite, the curve a run's curve (steps 0, 1, 2, ..., starting unloaded), and the
+/// state at the curve's last row.  What needs the mesh and the load path is checked in resume_from.
+void check_content(const Checkpoint& c, const ByteReader& in) {
+  const SimulationState& s = c.state;
+  const auto finite = [](const std::vector<double>& v) {
+    return std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); });
+  };
+  if (!std::isfinite(s.alpha) || !std::isfinite(s.alpha_previous) || !std::isfinite(s.deepest) ||
+      !std::isfinite(c.planned_contact_half_width))
+    in.fail("its state holds a number that is not finite");
+  if (!finite(s.u) || !finite(s.u_previous) || !finite(s.history)) in.fail("its displacement or material history holds "
+                                                                          "a number that is not finite");
+  if (!finite(c.mesh_x) || !finite(c.mesh_y) || !finite(c.free_surface_depths))
+    in.fail("its mesh or summary data hold a number that is not finite");
+  if (c.curve.empty()) in.fail("holds no curve row");
+  double deepest = 0.0;
+  for (std::size_t k = 0; k < c.curve.size(); ++k) {
+    const IncrementRecord& r = c.curve[k];
+    if (r.step != static_cast<int>(k)) in.fail(fmt::format("its curve row {} is numbered {}", k, r.step));
+    if (!std::isfinite(r.alpha) || !std::isfinite(r.force) || !std::isfinite(r.half_width) ||
+        !std::isfinite(r.max_strain_intensity) || !std::isfinite(r.wall_seconds))
+      in.fail(fmt::format("its curve row {} holds a number that is not finite", k));
+    if (r.alpha < 0.0 || r.force < 0.0 || r.half_width < 0.0 || r.contact_nodes < 0 || r.newton_iterations < 0 ||
+        r.factorizations < 0 || r.cutbacks < 0 || r.plastic_points < 0)
+      in.fail(fmt::format("its curve row {} holds a negative depth, force or count", k));
+    deepest = std::max(deepest, r.alpha);
+  }
+  if (c.curve.front().alpha != 0.0) in.fail("its curve does not start unloaded (alpha = 0)");
+  if (c.curve.back().alpha != s.alpha || deepest != s.deepest)
+    in.fail("its curve and its state disagree on the depth reached");
+  if (s.u.size() > 2 * c.mesh_x.size() * c.mesh_y.size() || (s.has_previous && s.u_previous.size() != s.u.size()) ||
+      s.in_contact.size() > c.mesh_x.size())
+    in.fail("its state does not fit its mesh");
+  const NearField& near = s.near_field;
+  if (near.condensed &&
+      (near.contact_nodes < 1 || near.contact_nodes > static_cast<int>(c.mesh_x.size()) || near.elements_x < 0 ||
+       near.elements_x >= static_cast<int>(c.mesh_x.size()) || near.elements_y < 0 ||
+       near.elements_y >= static_cast<int>(c.mesh_y.size())))
+    in.fail("its near field does not fit its mesh");
+}
+
 }  // namespace
 
 std::uint64_t fnv1a(const void* data, std::size_t size, std::uint64_t hash) {
@@ -229,6 +272,7 @@ Checkpoint deserialize(const std::string& bytes, const std::string& source) {
   if (c.free_surface_depths.size() != c.curve.size() || s.rows != static_cast<int>(c.curve.size()) ||
       s.next_target != c.curve.size())
     in.fail("its curve, summary and state disagree on the number of increments");
+  check_content(c, in);
   return c;
 }
 
@@ -456,6 +500,8 @@ ResumedRun resume_from(const Checkpoint& c, const std::string& source, const std
                                  "{:.6g} m): keep the path's waypoints and increments up to there",
                                  done - 1, before[done - 1]));
   if (!(c.planned_contact_half_width > 0.0)) fail("holds no valid mesh plan");
+  for (std::size_t k = 0; k < done; ++k)
+    if (c.curve[k].alpha != before[k]) fail(fmt::format("its curve row {} is not at the depth its load path plans", k));
   // The run continues on the near field it had (bit for bit), unless --set asks for the whole mesh.
   SimulationState state = c.state;
   if (run.load_case.solver.far_field == FarFieldChoice::full) state.near_field = NearField{};
@@ -467,6 +513,16 @@ ResumedRun resume_from(const Checkpoint& c, const std::string& source, const std
   } catch (const std::invalid_argument& e) {
     fail(std::string("its state does not fit its load case: ") + e.what());
   }
+  // The curve's last row must be what the state gives: the force and the contact set follow from
+  // the displacement.
+  const ContactResult contact = run.simulation->contact();
+  const IncrementRecord& last = c.curve.back();
+  double largest = 0.0;
+  for (const auto& r : c.curve) largest = std::max(largest, r.force);
+  if (std::abs(contact.force - last.force) > 1e-9 * largest || contact.contact_nodes != last.contact_nodes)
+    fail(fmt::format("its last curve row (P = {:.10g}, {} contact nodes) is not what its state gives (P = {:.10g}, "
+                     "{} contact nodes)",
+                     last.force, last.contact_nodes, contact.force, contact.contact_nodes));
   return run;
 }
 

@@ -67,12 +67,18 @@ double contact_half_width(const ContactBoundary& boundary, const ContactResult& 
   if (n + 1 >= static_cast<int>(cs.size())) return x_n;
   const double x_open = cs[n + 1].x;
 
-  // Least squares of p^2 = A + B x^2 over the contact nodes just inside the edge.
+  // Least squares of p^2 = A + B x^2 over the contact nodes just inside the edge.  The pressure
+  // is taken relative to the largest of them and x relative to x_open, so that the fit is the same
+  // in any units (p^2 of a pressure in pascals overflows for E near 1e160 and underflows for small E).
+  double p_scale = 0.0;
+  for (int k = std::max(0, n - 5); k < n; ++k)
+    if (contact.in_contact[k] && cs[k].tributary_width > 0.0)
+      p_scale = std::max(p_scale, std::abs(contact.nodal_force[k] / cs[k].tributary_width));
   double s1 = 0, sx = 0, sxx = 0, sy = 0, sxy = 0;
   int used = 0;
   for (int k = std::max(0, n - 5); k < n; ++k) {
-    if (!contact.in_contact[k] || !(cs[k].tributary_width > 0.0)) continue;
-    const double p = contact.nodal_force[k] / cs[k].tributary_width;
+    if (!contact.in_contact[k] || !(cs[k].tributary_width > 0.0) || !(p_scale > 0.0)) continue;
+    const double p = contact.nodal_force[k] / cs[k].tributary_width / p_scale;
     const double x2 = cs[k].x * cs[k].x, p2 = p * p;
     s1 += 1;
     sx += x2;

@@ -15,10 +15,6 @@
 
 namespace indentsim {
 
-IoError::IoError(std::string file, std::string action, std::string reason)
-    : std::runtime_error(fmt::format("{} {} failed: {}", action, file, reason)), file_(std::move(file)),
-      reason_(std::move(reason)) {}
-
 void throw_io_error(const std::filesystem::path& file, const std::string& action, int error) {
   throw IoError(file.string(), action, std::strerror(error));
 }

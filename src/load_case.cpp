@@ -1,6 +1,7 @@
 #include "indentsim/load_case.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -14,12 +15,6 @@
 
 namespace indentsim {
 
-InputError::InputError(std::string file, std::string key, std::string problem)
-    : std::runtime_error(fmt::format("{}: {}: {}", file, key.empty() ? "(file)" : key, problem)),
-      file_(std::move(file)),
-      key_(std::move(key)),
-      problem_(std::move(problem)) {}
-
 double LoadCase::max_depth() const {
   double deepest = 0.0;
   for (double alpha : load.path) deepest = std::max(deepest, alpha);
@@ -27,6 +22,8 @@ double LoadCase::max_depth() const {
 }
 
 namespace {
+
+constexpr double min_modulus = 1e-100, max_modulus = 1e100;  // material.E [Pa]
 
 // The words a load case uses for each choice, shared by the reader and by to_toml().
 template <class E>
@@ -198,7 +195,7 @@ public:
       }
       known += (known.empty() ? "" : ", ") + std::string(c.name);
     }
-    fail(section + "." + key, fmt::format("\"{}\" is not one of: {}", word, known));
+    fail(section + "." + key, fmt::format("\"{}\" is not one of: {}", printable(word, 60), known));
   }
 
   void read_number_array(const std::string& section, const std::string& key,
@@ -236,18 +233,24 @@ private:
   std::string source_;
 };
 
-// --set section.key=value: the value is read as a TOML value ("1e-3", "[0, 1e-5]", "\"j2\"")
-// and, when it is not one, as a bare string (so --set material.model=j2 works).
+// --set section.key=value: one key and one value.  The value is read as one TOML value ("1e-3",
+// "[0, 1e-5]", "\"j2\"") and, when it is not one, as a bare word of path characters (so --set
+// material.model=j2 and --set output.dir=runs/a work).  Anything else (a second key smuggled in
+// after a newline, a table, text with spaces or quotes that is not TOML) is refused.
 void apply_override(toml::table& root, const std::string& text, const std::string& source) {
+  const auto fail = [&](const std::string& key, const std::string& problem) {
+    throw InputError(source, key, "--set: " + problem);
+  };
   const auto eq = text.find('=');
-  if (eq == std::string::npos)
-    throw InputError(source, text, "--set expects section.key=value");
+  if (eq == std::string::npos) fail(printable(text, 80), "expects section.key=value");
   const std::string path = text.substr(0, eq);
   const std::string value_text = text.substr(eq + 1);
+  const auto is_name = [](const std::string& s) {
+    return !s.empty() && std::all_of(s.begin(), s.end(), [](unsigned char c) { return std::isalnum(c) || c == '_'; });
+  };
   const auto dot = path.find('.');
-  if (dot == std::string::npos || dot == 0 || dot + 1 == path.size() ||
-      path.find('.', dot + 1) != std::string::npos)
-    throw InputError(source, path, "--set expects section.key=value");
+  if (dot == std::string::npos || !is_name(path.substr(0, dot)) || !is_name(path.substr(dot + 1)))
+    fail(printable(path, 80), "expects section.key=value (one section, one key: letters, digits, _)");
   const std::string section = path.substr(0, dot);
   const std::string key = path.substr(dot + 1);
 
@@ -261,10 +264,21 @@ void apply_override(toml::table& root, const std::string& text, const std::strin
   if (!root.contains(section)) root.insert(section, toml::table{});
   toml::table* table = root[section].as_table();
   if (!table) throw InputError(source, section, "must be a table");
-  if (is_toml_value && parsed.contains("value"))
+  if (is_toml_value) {
+    if (parsed.size() != 1 || !parsed.contains("value"))
+      fail(path, fmt::format("\"{}\" is more than one value: one --set sets one key", printable(value_text, 60)));
+    if (parsed.get("value")->is_table())
+      fail(path, "a value, not a table");
     table->insert_or_assign(key, *parsed.get("value"));
-  else
-    table->insert_or_assign(key, value_text);
+    return;
+  }
+  const bool bare_word = !value_text.empty() && std::all_of(value_text.begin(), value_text.end(), [](unsigned char c) {
+    return std::isalnum(c) || std::string_view("_-./:+~@%,").find(static_cast<char>(c)) != std::string_view::npos;
+  });
+  if (!bare_word)
+    fail(path, fmt::format("\"{}\" is not a TOML value (quote a string with spaces or symbols: {}=\"...\")",
+                           printable(value_text, 60), path));
+  table->insert_or_assign(key, value_text);
 }
 
 LoadCase from_table(const toml::table& root, const std::string& source) {
@@ -360,16 +374,22 @@ void validate(const LoadCase& lc) {
   positive("geometry.ly", lc.geometry.ly);
   positive("punch.radius", lc.punch.radius);
   positive("material.E", lc.material.E);
+  // Stresses and forces are E times O(1) numbers and their squares are formed (norms, J2); beyond
+  // these bounds double precision cannot hold them.  Plausible moduli are warned about, not here.
+  if (!(lc.material.E >= min_modulus && lc.material.E <= max_modulus))
+    fail("material.E", fmt::format("{} Pa is outside [{:g}, {:g}] Pa, beyond what double precision can solve "
+                                   "(the results scale with E: use SI units, pascals)",
+                                   lc.material.E, min_modulus, max_modulus));
   if (!(lc.material.nu > -1.0 && lc.material.nu < 0.5))
     fail("material.nu", fmt::format("must lie in (-1, 0.5) (got {})", lc.material.nu));
-  if (lc.material.model != MaterialModel::elastic) {
-    positive("material.e0", lc.material.e0);
-    if (lc.material.hardening == HardeningLaw::linear &&
-        !(lc.material.kappa >= 0.0 && lc.material.kappa < 1.0))
-      fail("material.kappa", fmt::format("must lie in [0, 1) (got {})", lc.material.kappa));
-    if (lc.material.hardening == HardeningLaw::power && !(lc.material.n > 0.0 && lc.material.n < 1.0))
-      fail("material.n", fmt::format("must lie in (0, 1) (got {})", lc.material.n));
-  }
+  // Every key given is checked, whatever the model uses: a case that is switched to another model
+  // later must not carry a value that was never valid.
+  positive("material.e0", lc.material.e0);
+  if (!(lc.material.e0 < 1.0)) fail("material.e0", fmt::format("must lie in (0, 1): a strain (got {})", lc.material.e0));
+  if (!(lc.material.kappa >= 0.0 && lc.material.kappa < 1.0))
+    fail("material.kappa", fmt::format("must lie in [0, 1) (got {})", lc.material.kappa));
+  if (!(lc.material.n > 0.0 && lc.material.n < 1.0))
+    fail("material.n", fmt::format("must lie in (0, 1) (got {})", lc.material.n));
 
   const auto& path = lc.load.path;
   if (path.size() < 2) fail("load.path", "needs at least two waypoints, starting at 0");
@@ -377,6 +397,13 @@ void validate(const LoadCase& lc) {
   for (std::size_t i = 0; i < path.size(); ++i)
     if (path[i] < 0.0) fail("load.path", fmt::format("waypoint {} is a negative depth ({})", i, path[i]));
   if (!(lc.max_depth() > 0.0)) fail("load.path", "never indents: every waypoint is 0");
+  // The gap g(x) = R - sqrt(R^2 - x^2) and the displacements are resolved against R and the
+  // block in double precision: a depth below 1e-9 of them is round-off, not an indentation.
+  const double resolvable = 1e-9 * std::max(lc.punch.radius, lc.geometry.ly);
+  if (lc.max_depth() < resolvable)
+    fail("load.path", fmt::format("the deepest depth {:g} m is below what double precision resolves against the "
+                                  "punch radius and the block ({:g} m, 1e-9 of them)",
+                                  lc.max_depth(), resolvable));
   if (lc.max_depth() >= lc.punch.radius)
     fail("load.path", fmt::format("depth {} reaches the punch radius {}: no circular contact possible",
                                   lc.max_depth(), lc.punch.radius));
@@ -407,8 +434,12 @@ void validate(const LoadCase& lc) {
       fail("output.profile_depths", fmt::format("element {} = {} is not a depth within the block [0, {}]", i, d, lc.geometry.ly));
   }
 
-  if (!(lc.solver.tolerance > 0.0 && lc.solver.tolerance < 1e-2))
-    fail("solver.tolerance", fmt::format("must lie in (0, 1e-2) (got {})", lc.solver.tolerance));
+  // The residual is relative to E* alpha_max; round-off in assembling it is about 1e-16 times the
+  // condition of the stiffness, so a tolerance below 1e-14 cannot be reached, only run into.
+  if (!(lc.solver.tolerance >= 1e-14 && lc.solver.tolerance < 1e-2))
+    fail("solver.tolerance", fmt::format("must lie in [1e-14, 1e-2) (got {}): below 1e-14 round-off dominates the "
+                                         "residual",
+                                         lc.solver.tolerance));
   if (lc.solver.max_newton < 1 || lc.solver.max_newton > 1000)
     fail("solver.max_newton", fmt::format("must lie in [1, 1000] (got {})", lc.solver.max_newton));
   if (lc.solver.max_cutbacks < 0 || lc.solver.max_cutbacks > 60)

@@ -18,6 +18,7 @@
 
 #include "indentsim/checkpoint.hpp"
 #include "indentsim/error.hpp"
+#include "indentsim/interruption.hpp"
 #include "indentsim/io.hpp"
 #include "indentsim/load_case.hpp"
 #include "indentsim/run_folder.hpp"
@@ -115,12 +116,7 @@ int command_check(const std::string& file, const std::vector<std::string>& overr
   return 0;
 }
 
-volatile std::sig_atomic_t stop_signal = 0;
-extern "C" void on_stop_signal(int signal) { stop_signal = signal; }
-
-struct Interrupted {
-  int signal;
-};
+extern "C" void on_stop_signal(int signal) { request_interruption(signal); }
 
 /// Steps the simulation to the end of its load path, writing outputs and checkpoints; on
 /// SIGINT/SIGTERM it checkpoints after the increment in progress and stops cleanly.  Ends the
@@ -129,8 +125,6 @@ int drive(Simulation& sim, RunOutput& output, const std::string& label, bool qui
   const LoadCase& lc = sim.load_case();
   const fs::path checkpoint_dir = fs::path(lc.output.dir) / "checkpoints";
   const CheckpointSchedule schedule = CheckpointSchedule::of(lc);
-  std::signal(SIGINT, on_stop_signal);
-  std::signal(SIGTERM, on_stop_signal);
   Progress progress(static_cast<int>(plan_increments(lc.load).size()) - 1, quiet);
   std::size_t warnings_shown = 0;
   const auto show_warnings = [&] {
@@ -156,7 +150,7 @@ int drive(Simulation& sim, RunOutput& output, const std::string& label, bool qui
         show_warnings();
         progress.update(r);
         if (schedule.due(r.step)) checkpoint();
-        if (stop_signal) throw Interrupted{stop_signal};
+        if (const int signal = interruption_requested()) throw Interrupted(signal);
       });
       if (lc.output.checkpoint_every > 0 && last_checkpoint != output.records().back().step) checkpoint();
     } catch (const SolverError& e) {
@@ -169,10 +163,10 @@ int drive(Simulation& sim, RunOutput& output, const std::string& label, bool qui
       progress.clear_line();
       const fs::path file = checkpoint();
       fmt::print(stderr, "{}: stopped by signal {} after increment {}; resume with: indentsim resume {}\n", label,
-                 i.signal, output.records().back().step, file.string());
-      exit_code = 128 + i.signal;
+                 i.signal(), output.records().back().step, file.string());
+      exit_code = 128 + i.signal();
       status = RunStatus::stopped;
-      message = fmt::format("stopped by signal {}; resume with: indentsim resume {}", i.signal, file.string());
+      message = fmt::format("stopped by signal {}; resume with: indentsim resume {}", i.signal(), file.string());
     }
     progress.finish();
     output.finish(sim, status, message);
@@ -280,7 +274,9 @@ int main(int argc, char** argv) {
       "run", "solve a load case; write DIR/curve.csv, fields.pvd, layers.csv, profiles.csv, case.toml");
   run->add_option("case", file, "load case (TOML)")->required();
   run->add_option("--out", out, "output folder (overrides output.dir)");
-  run->add_option("--set", overrides, "override a key: section.key=value")->take_all();
+  run->add_option("--set", overrides, "override one key: section.key=value (repeat for more)")
+      ->allow_extra_args(false)
+      ->take_all();
   run->add_flag("--quiet,-q", quiet, "print nothing but warnings and errors (no progress line)");
 
   bool list = false;
@@ -289,12 +285,16 @@ int main(int argc, char** argv) {
   resume->add_option("checkpoint", file, "checkpoint file, run folder or checkpoints folder")->required();
   resume->add_flag("--list", list, "list the folder's checkpoints (step, alpha, P) and exit");
   resume->add_option("--out", out, "output folder (default: the run's own)");
-  resume->add_option("--set", overrides, "override a key, e.g. load.path=... to branch")->take_all();
+  resume->add_option("--set", overrides, "override one key, e.g. load.path=... to branch (repeat for more)")
+      ->allow_extra_args(false)
+      ->take_all();
   resume->add_flag("--quiet,-q", quiet, "print nothing but warnings and errors (no progress line)");
 
   CLI::App* check = app.add_subcommand("check", "validate a load case without solving");
   check->add_option("case", file, "load case (TOML)")->required();
-  check->add_option("--set", overrides, "override a key: section.key=value")->take_all();
+  check->add_option("--set", overrides, "override one key: section.key=value (repeat for more)")
+      ->allow_extra_args(false)
+      ->take_all();
 
   try {
     app.parse(argc, argv);
@@ -305,7 +305,14 @@ int main(int argc, char** argv) {
     return exit_bad_input;
   }
 
+  // SIGINT/SIGTERM stop a run at the next Newton iteration, after its last converged increment
+  // is checkpointed (drive); before the first increment there is nothing to keep.
+  std::signal(SIGINT, on_stop_signal);
+  std::signal(SIGTERM, on_stop_signal);
   try {
+    for (CLI::App* command : {run, resume})
+      if (command->parsed() && command->get_option("--out")->count() > 0 && out.empty())
+        throw InputError("--out", "--out", "must name a folder (it is empty)");
     if (run->parsed()) return command_run(file, overrides, out, quiet);
     if (resume->parsed()) return list ? command_list_checkpoints(file) : command_resume(file, overrides, out, quiet);
     return command_check(file, overrides);
@@ -318,6 +325,9 @@ int main(int argc, char** argv) {
   } catch (const std::filesystem::filesystem_error& e) {
     fmt::print(stderr, "error: {}\n", e.what());
     return exit_io_failure;
+  } catch (const Interrupted& i) {
+    fmt::print(stderr, "stopped by signal {} before the first increment; nothing to resume\n", i.signal());
+    return 128 + i.signal();
   } catch (const std::exception& e) {
     fmt::print(stderr, "error: {}\n", e.what());
     return 1;

@@ -1,5 +1,8 @@
 #include "indentsim/simulation.hpp"
 
+#include "indentsim/interruption.hpp"
+
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -192,11 +195,6 @@ void Simulation::run(const std::function<void(const IncrementRecord&)>& on_incre
     ++next_target_;  // before reporting: a checkpoint taken now continues with the next depth
     if (on_increment) on_increment(r);
   }
-  const ContactResult final_contact = contact();
-  if (final_contact.force > 0.0 && final_contact.contact_nodes < 4)
-    warnings_.push_back(fmt::format("the contact zone spans only {} node(s) at the final depth: the result is "
-                                    "coarse; raise mesh.contact_nodes",
-                                    final_contact.contact_nodes));
 }
 
 IncrementRecord Simulation::advance_to(double target) {
@@ -204,7 +202,17 @@ IncrementRecord Simulation::advance_to(double target) {
   long iterations = 0, factorizations = 0;
   int cutbacks = 0;
   double step = target - alpha_;
+  // The state of the last reported increment, saved before a converged sub-step (after a
+  // cutback) moves the simulation past it: an interruption returns to it.
+  std::optional<SimulationState> reported;
+  const auto stop_if_requested = [&] {
+    if (const int signal = interruption_requested()) {
+      if (reported) restore(*reported);
+      throw Interrupted(signal);
+    }
+  };
   for (;;) {
+    stop_if_requested();
     double trial = alpha_ + step;
     if (std::abs(target - trial) <= 1e-12 * std::abs(target)) trial = target;
     // Full semi-smooth Newton steps first, for a quarter of the iteration budget (a converging
@@ -221,9 +229,11 @@ IncrementRecord Simulation::advance_to(double target) {
       iterations += last_report_.iterations;
       factorizations += last_report_.factorizations;
       if ((converged = last_report_.converged)) break;
+      stop_if_requested();
     }
     const NewtonReport& report = last_report_;
     if (converged) {
+      if (trial != target && !reported) reported = state();
       from_system(system_guess_, guess_);
       if (grow_near_field(guess_, trial)) {
         ++near_field_growths_;
@@ -268,6 +278,7 @@ void Simulation::predict(double trial, long& iterations, long& factorizations) {
   equations_->use_bulk(system_elastic_bulk());
   const NewtonReport elastic = newton_->solve(trial, system_guess_);
   equations_->use_bulk(system_bulk());
+  if (const int signal = interruption_requested()) throw Interrupted(signal);  // nothing committed yet
   iterations += elastic.iterations;
   factorizations += elastic.factorizations;
   if (!elastic.converged) to_system(u_, system_guess_);
@@ -437,6 +448,14 @@ IncrementRecord Simulation::record(double wall_seconds, long iterations, long fa
   r.max_strain_intensity = bulk_->max_strain_intensity();
   r.wall_seconds = wall_seconds;
   check_fine_zone(r.half_width);
+  // Resolution is judged where the contact is largest, at the deepest point of the path (a history
+  // that unloads ends with no contact, which says nothing about the mesh).
+  if (alpha_ == load_case_.max_depth() && c.force > 0.0 && c.contact_nodes < 4) {
+    const std::string coarse = fmt::format("the contact zone spans only {} node(s) at the deepest point: the result "
+                                           "is coarse; raise mesh.contact_nodes",
+                                           c.contact_nodes);
+    if (std::find(warnings_.begin(), warnings_.end(), coarse) == warnings_.end()) warnings_.push_back(coarse);
+  }
   return r;
 }
 

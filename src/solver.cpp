@@ -5,6 +5,8 @@
 #include <cstring>
 #include <type_traits>
 
+#include "indentsim/interruption.hpp"
+
 #include "cholmod_solver.hpp"
 #include "sundials_handles.hpp"
 
@@ -156,6 +158,8 @@ struct KluWithReuse {
 
 // A chord step needs the previous step to have cut the residual by this factor (see above).
 constexpr double chord_contraction = 1e-2;
+// Residual norms kept per solve (diagnostics and the convergence tests need the first few).
+constexpr std::size_t max_residual_history = 10000;
 
 struct NewtonSolver::Impl {
   IncrementEquations& equations;
@@ -230,12 +234,16 @@ struct NewtonSolver::Impl {
   }
 
   static int residual_callback(N_Vector u, N_Vector f, void* data) {
+    // A stop requested from outside (SIGINT/SIGTERM) ends this solve at once (unrecoverable for
+    // KINSOL); the simulation then returns to its last converged increment.
+    if (interruption_requested()) return -1;
     auto* me = static_cast<Impl*>(data);
     double* values = N_VGetArrayPointer(f);
     me->equations.residual(N_VGetArrayPointer(u), me->alpha, values);
     double norm = 0.0;
     for (sunindextype i = 0; i < N_VGetLength(f); ++i) norm = std::max(norm, std::abs(values[i]));
-    me->residual_history.push_back(norm / me->settings.force_scale);
+    // Bounded: a solve that never converges must not grow memory without end.
+    if (me->residual_history.size() < max_residual_history) me->residual_history.push_back(norm / me->settings.force_scale);
     return 0;
   }
 

@@ -6,7 +6,12 @@
 
 namespace indentsim {
 
-/// Bad input: names the file, the key and what is wrong with it.
+/// `text` as it can be shown in one line of a message: control characters escaped (\n, \t,
+/// \x00, ...) and anything beyond `max_length` bytes cut with an ellipsis and the count cut.
+std::string printable(const std::string& text, std::size_t max_length = 200);
+
+/// Bad input: names the file, the key and what is wrong with it.  The message shows all three
+/// through printable(), so a hostile value cannot cut or flood it.
 class InputError : public std::runtime_error {
 public:
   InputError(std::string file, std::string key, std::string problem);

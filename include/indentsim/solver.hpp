@@ -101,7 +101,7 @@ struct NewtonReport {
   double condition_estimate = 0.0;
   int kinsol_flag = 0;
   std::string message;          ///< KINSOL's own words when it failed
-  std::vector<double> residual_history;  ///< max |F| / force_scale at each residual evaluation
+  std::vector<double> residual_history;  ///< max |F| / force_scale at each residual evaluation (the first 10 000)
 };
 
 class NewtonSolver {

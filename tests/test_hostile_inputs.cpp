@@ -1,0 +1,252 @@
+// Regression tests for the hostile inputs and faults of the robustness review (one or more per
+// numbered item; items 1 and 2, the output-folder splices, are in test_run_folder.cpp).  Every
+// run is small and bounded in time.
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include "indentsim/checkpoint.hpp"
+#include "indentsim/error.hpp"
+#include "indentsim/simulation.hpp"
+#include "test_support.hpp"
+
+namespace fs = std::filesystem;
+using namespace indentsim;
+using indentsim::testing::shipped_case;
+using indentsim::testing::slurp;
+using indentsim::testing::source_path;
+
+namespace {
+
+class Hostile : public indentsim::testing::CliTest {
+protected:
+  const std::string elastic = source_path("loadcases/elastic.toml");
+  const std::string small = " --quiet --set mesh.contact_nodes=6 --set load.increments=4";
+  // Runs `args`; expects exit 2 with `key` named and nothing written to `out`.
+  void expect_refused(const std::string& args, const std::string& key) {
+    SCOPED_TRACE(args);
+    const fs::path out = dir_ / "never";
+    EXPECT_EQ(cli(args + " --out " + out.string()), 2) << err();
+    EXPECT_NE(err().find(key), std::string::npos) << err();
+    EXPECT_FALSE(fs::exists(out));
+  }
+};
+
+// A run's checkpoint rewritten with `edit` applied and its checksum recomputed.
+fs::path edited_checkpoint(const fs::path& good, const fs::path& file, const std::function<void(Checkpoint&)>& edit) {
+  Checkpoint c = read_checkpoint(good);
+  edit(c);
+  std::ofstream(file, std::ios::binary) << serialize(c);
+  return file;
+}
+
+}  // namespace
+
+// 3. resume DIR takes only checkpoints of the folder's own run, the newest by step, and says which.
+TEST_F(Hostile, ResumeOfAFolderTakesOnlyItsOwnRunsCheckpoints) {
+  const fs::path run = dir_ / "run", other = dir_ / "other";
+  ASSERT_EQ(cli("run " + elastic + small + " --set output.checkpoint_every=2 --out " + run.string()), 0) << err();
+  ASSERT_EQ(cli("run " + elastic + small + " --set material.E=70e9 --set load.increments=9 --set output.checkpoint_every=9 "
+                "--out " + other.string()),
+            0)
+      << err();
+  // Another case's checkpoints dropped into the folder: one under a foreign name, one named like
+  // the run's own and newer by step.
+  fs::copy_file(other / "checkpoints" / "checkpoint_000009.ck", run / "checkpoints" / "old.ck");
+  fs::copy_file(other / "checkpoints" / "checkpoint_000009.ck", run / "checkpoints" / "checkpoint_000009.ck");
+  fs::remove(run / "checkpoints" / "checkpoint_000004.ck");  // the run's newest left is step 2
+  ASSERT_EQ(cli("resume " + run.string()), 0) << err();
+  EXPECT_NE(out().find("checkpoint_000002.ck"), std::string::npos) << out();
+  EXPECT_NE(slurp(run / "case.toml").find("E = 210000000000\n"), std::string::npos);
+  // Without a case.toml, checkpoints of two runs cannot be told apart: refused, naming both.
+  fs::remove(run / "case.toml");
+  EXPECT_EQ(cli("resume " + (run / "checkpoints").string()), 2) << err();
+  EXPECT_NE(err().find("different runs"), std::string::npos) << err();
+}
+
+// 4. Moduli that double precision cannot solve are refused, naming material.E, by run and check.
+TEST_F(Hostile, ModuliBeyondDoublePrecisionAreRefused) {
+  for (const char* E : {"1e307", "1.7e308", "4.9e-324", "1e-305"}) {
+    expect_refused("run " + elastic + small + " --set material.E=" + E, "material.E");
+    EXPECT_EQ(cli("check " + elastic + " --set material.E=" + std::string(E)), 2);
+  }
+}
+
+// 5. Nothing depends on the units beyond the obvious scaling: E x 1e+-6 scales P, a stays.
+TEST(HostileScaling, ForceScalesWithTheModulusAndTheContactWidthDoesNot) {
+  for (const char* model : {"elastic", "j2"}) {
+    SCOPED_TRACE(model);
+    const std::vector<std::string> common = {std::string("material.model=") + model, "mesh.contact_nodes=8",
+                                             "load.increments=4"};
+    // x 1e+-6 as the review tried, and 2^+-290 (about 1e+-87) towards the accepted bounds.
+    const double factors[] = {1.0, 1e6, 1e-6, std::ldexp(1.0, 290), std::ldexp(1.0, -290)};
+    std::vector<std::vector<IncrementRecord>> curves;
+    for (double factor : factors) {
+      std::vector<std::string> o = common;
+      o.push_back(fmt::format("material.E={:.17g}", 210e9 * factor));
+      Simulation sim(shipped_case("deep_plastic.toml", o));
+      std::vector<IncrementRecord> rows;
+      sim.run([&](const IncrementRecord& r) { rows.push_back(r); });
+      curves.push_back(rows);
+    }
+    for (std::size_t c = 1; c < curves.size(); ++c)
+      for (std::size_t k = 0; k < curves[0].size(); ++k) {
+        SCOPED_TRACE(k);
+        EXPECT_NEAR(curves[c][k].force / factors[c], curves[0][k].force, 1e-8 * curves[0].back().force);
+        EXPECT_NEAR(curves[c][k].half_width, curves[0][k].half_width, 1e-8 * curves[0].back().half_width);
+        EXPECT_EQ(curves[c][k].contact_nodes, curves[0][k].contact_nodes);
+      }
+  }
+}
+
+// 6. A checkpoint whose checksum was recomputed after an edit is checked by its content.
+TEST_F(Hostile, EditedCheckpointsWithAValidChecksumAreRefused) {
+  const fs::path run = dir_ / "run";
+  ASSERT_EQ(cli("run " + source_path("loadcases/deep_plastic.toml") +
+                " --quiet --set mesh.contact_nodes=6 --set load.increments=12 --set output.checkpoint_every=12 --out " +
+                run.string()),
+            0)
+      << err();
+  const fs::path good = run / "checkpoints" / "checkpoint_000012.ck";
+  const auto cut = [](std::size_t rows) {
+    return [rows](Checkpoint& c) {
+      c.curve.resize(rows);
+      c.free_surface_depths.resize(rows);
+      c.state.rows = static_cast<int>(rows);
+      c.state.next_target = rows;
+    };
+  };
+  const std::pair<const char*, std::function<void(Checkpoint&)>> edits[] = {
+      {"cut1.ck", cut(1)},
+      {"cut10.ck", cut(10)},
+      {"cut10_alpha.ck",
+       [&](Checkpoint& c) {
+         cut(10)(c);
+         c.state.alpha = c.curve.back().alpha;  // the counters and the depth patched as well
+         c.state.deepest = c.state.alpha;
+       }},
+      {"nan_row.ck", [](Checkpoint& c) { c.curve[5].force = std::nan(""); }},
+      {"nan_state.ck", [](Checkpoint& c) { c.state.u[3] = std::nan(""); }},
+      {"zero_near_field.ck", [](Checkpoint& c) { c.state.near_field = NearField{true, 0, 0, 0}; }},
+      {"force_edited.ck", [](Checkpoint& c) { c.curve.back().force *= 1.01; }},
+  };
+  for (const auto& [name, edit] : edits) {
+    SCOPED_TRACE(name);
+    const fs::path file = edited_checkpoint(good, dir_ / name, edit);
+    EXPECT_EQ(cli("resume " + file.string() + " --quiet --out " + (dir_ / "never").string()), 2) << err();
+    EXPECT_NE(err().find(name), std::string::npos) << err();
+    EXPECT_FALSE(fs::exists(dir_ / "never"));
+  }
+}
+
+// 7. Every key given is validated, whatever the model.
+TEST_F(Hostile, PlasticKeysAreValidatedForAnElasticModel) {
+  for (const char* bad : {"material.kappa=5", "material.kappa=1", "material.e0=-1", "material.n=5", "material.e0=2"})
+    expect_refused("run " + elastic + small + " --set " + bad, std::string(bad).substr(0, std::string(bad).find('=')));
+}
+
+// 8, 9. A signal is honoured within an increment: the run stops at once, keeps the last converged
+// increment, checkpoints it and exits 128 + signal.  One long increment (a fine plastic mesh):
+// honouring the signal only after it would let this run finish with status 0.
+TEST_F(Hostile, SigtermWithinALongIncrementStopsItAndKeepsTheLastConvergedOne) {
+  const fs::path out = dir_ / "long";
+  const std::string curve = (out / "curve.csv").string();
+  const std::string command = "timeout 120 " + std::string(INDENTSIM_CLI) + " run " +
+                              source_path("loadcases/deep_plastic.toml") +
+                              " --quiet --set mesh.contact_nodes=30 --set load.increments=1 --out " + out.string() +
+                              " 2>" + (dir_ / "err.txt").string() + " & pid=$!; for i in $(seq 1200); do [ -s " + curve +
+                              " ] && [ $(wc -l < " + curve + ") -ge 2 ] && break; sleep 0.05; done; sleep 0.3; " +
+                              "kill -TERM $pid; wait $pid";
+  const int raw = std::system(("bash -c '" + command + "'").c_str());
+  ASSERT_TRUE(WIFEXITED(raw));
+  EXPECT_EQ(WEXITSTATUS(raw), 128 + SIGTERM) << err();
+  std::istringstream rows(slurp(out / "curve.csv"));
+  std::string line;
+  int n = 0;
+  while (std::getline(rows, line)) ++n;
+  EXPECT_EQ(n, 2);  // the header and alpha = 0: the interrupted increment is not reported
+  EXPECT_TRUE(fs::exists(out / "checkpoints" / "checkpoint_000000.ck"));
+  EXPECT_NE(slurp(out / "summary.json").find("\"stopped\""), std::string::npos);
+}
+
+// 10. Inputs below what double precision resolves are refused at once, naming the key.
+TEST_F(Hostile, DepthsAndTolerancesBelowDoublePrecisionAreRefused) {
+  expect_refused("run " + elastic + small + " --set load.path=[0,1e-300]", "load.path");
+  expect_refused("run " + elastic + small + " --set load.path=[0,5e-324]", "load.path");
+  expect_refused("run " + elastic + small + " --set solver.tolerance=1e-300", "solver.tolerance");
+}
+
+// 11. Output-folder problems are found before solving, by run and by check: exit 2 naming
+// output.dir and the reason.
+TEST_F(Hostile, OutputFolderProblemsAreFoundBeforeSolving) {
+  const fs::path blocked = dir_ / "blocked";
+  fs::create_directories(blocked / "curve.csv");  // a folder where a run writes a file
+  EXPECT_EQ(cli("run " + elastic + small + " --out " + blocked.string()), 2) << err();
+  EXPECT_NE(err().find("output.dir"), std::string::npos) << err();
+  EXPECT_EQ(cli("check " + elastic + " --set output.dir=" + blocked.string()), 2) << err();
+  EXPECT_FALSE(fs::exists(blocked / "case.toml"));
+
+  const fs::path file_in_the_way = dir_ / "filed";
+  fs::create_directories(file_in_the_way);
+  std::ofstream(file_in_the_way / "checkpoints") << "not a folder";
+  EXPECT_EQ(cli("run " + elastic + small + " --out " + file_in_the_way.string()), 2) << err();
+  EXPECT_FALSE(fs::exists(file_in_the_way / "case.toml"));
+  EXPECT_FALSE(fs::exists(file_in_the_way / "curve.csv"));
+
+  const fs::path a_file = dir_ / "a_file";
+  std::ofstream(a_file) << "x";
+  EXPECT_EQ(cli("check " + elastic + " --set output.dir=" + a_file.string()), 2) << err();
+  EXPECT_EQ(cli("run " + elastic + small + " --out " + a_file.string()), 2) << err();
+
+  // A folder the kernel will not let anyone write (root included).
+  EXPECT_EQ(cli("run " + elastic + small + " --out /proc/sys/kernel"), 2) << err();
+  EXPECT_NE(err().find("output.dir"), std::string::npos) << err();
+}
+
+// 12. Strings in messages are escaped and cut.
+TEST_F(Hostile, MessagesEscapeControlCharactersAndCutLongValues) {
+  const fs::path c = dir_ / "nul.toml";
+  std::ofstream(c) << slurp(elastic).replace(slurp(elastic).find("model = \"elastic\""), 17, "model = \"\\u00e9lastic\\u0000\"");
+  EXPECT_EQ(cli("check " + c.string()), 2);
+  EXPECT_NE(err().find("lastic\\x00"), std::string::npos) << err();
+  EXPECT_NE(err().find("is not one of"), std::string::npos) << err();
+  const fs::path long_case = dir_ / "long.toml";
+  std::ofstream(long_case) << slurp(elastic).replace(slurp(elastic).find("model = \"elastic\""), 17,
+                                                     "model = \"" + std::string(1 << 20, 'x') + "\"");
+  EXPECT_EQ(cli("check " + long_case.string()), 2);
+  EXPECT_LT(err().size(), 2000u);
+  EXPECT_NE(err().find("more bytes"), std::string::npos) << err();
+}
+
+// 13. One --set is one key and one value; --out '' is refused; a case after --set is the case.
+TEST_F(Hostile, CommandLineInputIsNeverSilentlyIgnored) {
+  expect_refused("run " + elastic + small + " --set $'material.E=70e9\\nnu=0.45'", "material.E");
+  expect_refused("run " + elastic + small + " --set $'material.E=70e9\\n[extra]\\nx=1'", "material.E");
+  EXPECT_EQ(cli("run " + elastic + small + " --out ''"), 2) << err();
+  EXPECT_NE(err().find("--out"), std::string::npos) << err();
+  EXPECT_EQ(cli("run --set mesh.contact_nodes=6 " + elastic + " --quiet --set load.increments=2 --out " +
+                (dir_ / "ok").string()),
+            0)
+      << err();
+}
+
+// 14. Resolution is warned about at the peak, not at an unloaded end.
+TEST_F(Hostile, NoCoarseWarningAtAnUnloadedEnd) {
+  ASSERT_EQ(cli("run " + elastic + " --quiet --set mesh.contact_nodes=8 --set load.path=[0,5e-5,0] "
+                "--set load.increments=6 --out " + (dir_ / "unloaded").string()),
+            0)
+      << err();
+  EXPECT_EQ(err().find("coarse"), std::string::npos) << err();
+  // and a coarse peak is still warned about.
+  ASSERT_EQ(cli("run " + elastic + " --quiet --set mesh.contact_nodes=2 --set load.path=[0,5e-5,0] "
+                "--set load.increments=6 --out " + (dir_ / "coarse").string()),
+            0)
+      << err();
+  EXPECT_NE(err().find("coarse"), std::string::npos) << err();
+}
