@@ -360,33 +360,6 @@ std::filesystem::path save_checkpoint(const std::filesystem::path& dir, const Ch
   return file;
 }
 
-std::string first_physics_difference(const LoadCase& a, const LoadCase& b) {
-  const struct {
-    const char* key;
-    bool same;
-  } keys[] = {
-      {"geometry.lx", a.geometry.lx == b.geometry.lx},
-      {"geometry.ly", a.geometry.ly == b.geometry.ly},
-      {"punch.radius", a.punch.radius == b.punch.radius},
-      {"material.model", a.material.model == b.material.model},
-      {"material.E", a.material.E == b.material.E},
-      {"material.nu", a.material.nu == b.material.nu},
-      {"material.e0", a.material.e0 == b.material.e0},
-      {"material.hardening", a.material.hardening == b.material.hardening},
-      {"material.kappa", a.material.kappa == b.material.kappa},
-      {"material.n", a.material.n == b.material.n},
-      {"mesh.element", a.mesh.element == b.mesh.element},
-      {"mesh.contact_nodes", a.mesh.contact_nodes == b.mesh.contact_nodes},
-      {"mesh.contact_half_width", a.mesh.contact_half_width == b.mesh.contact_half_width},
-      {"mesh.fine_width", a.mesh.fine_width == b.mesh.fine_width},
-      {"mesh.fine_depth", a.mesh.fine_depth == b.mesh.fine_depth},
-      {"mesh.growth", a.mesh.growth == b.mesh.growth},
-  };
-  for (const auto& k : keys)
-    if (!k.same) return k.key;
-  return "";
-}
-
 bool same_run(const LoadCase& a, const LoadCase& b) {
   return first_physics_difference(a, b).empty() && a.load.path == b.load.path &&
          a.load.increments == b.load.increments && a.load.segment_increments == b.load.segment_increments;

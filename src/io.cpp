@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include "indentsim/simulation.hpp"
+#include "indentsim/version.hpp"
 
 namespace indentsim {
 
@@ -24,6 +25,21 @@ std::string json_string(const std::string& text) {
     }
   }
   return out + "\"";
+}
+
+/// What summary.json says of the run besides its results: who wrote it, the units, the material.
+std::string run_fields(const LoadCase& lc) {
+  const auto& m = lc.material;
+  return fmt::format(
+      "  \"indentsim\": {},\n"
+      "  \"units\": {{\"depth\": \"m\", \"force\": \"N/m (per unit thickness, both halves)\", "
+      "\"stiffness\": \"N/m per m\", \"stress\": \"Pa\"}},\n"
+      "  \"model\": \"{}\",\n"
+      "  \"material\": {{\"E\": {}, \"nu\": {}, \"e0\": {}, \"yield_stress\": {}, \"hardening\": \"{}\", "
+      "\"kappa\": {}, \"n\": {}}},\n",
+      json_string(version_line()), to_string(m.model), m.E, m.nu, m.e0,
+      m.yield_stress.value_or(yield_stress_of_e0(m.e0, m.E, m.nu)),
+      to_string(m.hardening), m.kappa, m.n);
 }
 
 }  // namespace
@@ -89,12 +105,13 @@ void LoadHistorySummary::add(const IncrementRecord& r, double free_surface_depth
   previous_ = r;
 }
 
-std::string LoadHistorySummary::json(const std::string& model, RunStatus status, const std::string& message) const {
+std::string LoadHistorySummary::json(const std::string& run_fields, RunStatus status, const std::string& message) const {
   std::string out = fmt::format("{{\n  \"status\": \"{}\",\n", to_string(status));
   if (!message.empty()) out += fmt::format("  \"message\": {},\n", json_string(message));
-  out += fmt::format("  \"model\": \"{}\",\n  \"increments\": {},\n  \"peak_depth\": {:.17g},\n"
+  out += run_fields;
+  out += fmt::format("  \"increments\": {},\n  \"peak_depth\": {:.17g},\n"
                      "  \"peak_force\": {:.17g},\n  \"unloading\": [",
-                     model, previous_ ? previous_->step : 0, peak_depth_, peak_force_);
+                     previous_ ? previous_->step : 0, peak_depth_, peak_force_);
   for (std::size_t i = 0; i < unloadings_.size(); ++i) {
     const Unloading& u = unloadings_[i];
     out += fmt::format("{}\n    {{\"step\": {}, \"depth\": {:.17g}, \"force\": {:.17g}, \"stiffness\": {:.17g}, "
@@ -112,13 +129,13 @@ std::string LoadHistorySummary::json(const std::string& model, RunStatus status,
 RunOutput::RunOutput(const std::filesystem::path& dir, const LoadCase& load_case,
                      const std::vector<IncrementRecord>& replay_curve, const std::vector<double>& replay_depths)
     : dir_(dir),
-      model_(to_string(load_case.material.model)),
+      run_fields_(run_fields(load_case)),
       fields_every_(load_case.output.fields_every),
       profile_depths_(load_case.output.profile_depths),
       curve_(dir / "curve.csv"),
       fields_(dir) {
   write_file_atomically(dir_ / "case.toml", to_toml(load_case));
-  write_file_atomically(dir_ / "summary.json", summary_.json(model_, RunStatus::running, ""));
+  write_file_atomically(dir_ / "summary.json", summary_.json(run_fields_, RunStatus::running, ""));
   for (std::size_t k = 0; k < replay_curve.size(); ++k) {
     const IncrementRecord& r = replay_curve[k];
     curve_.write(r);
@@ -161,7 +178,7 @@ void RunOutput::finish(const Simulation& sim, RunStatus status, const std::strin
     write_file_atomically(dir_ / "profiles.csv", profiles_csv(mesh, profile_lines(mesh, profile_depths_), layer,
                                                              average_to_nodes(mesh, sim.bulk())));
   }
-  write_file_atomically(dir_ / "summary.json", summary_.json(model_, status, message));
+  write_file_atomically(dir_ / "summary.json", summary_.json(run_fields_, status, message));
 }
 
 void RunOutput::fail(const std::string& message) noexcept {
@@ -171,7 +188,7 @@ void RunOutput::fail(const std::string& message) noexcept {
     for (const auto& folder : {dir_, dir_ / "fields", dir_ / "checkpoints"})
       for (const auto& entry : std::filesystem::directory_iterator(folder, ec))
         if (entry.path().extension() == ".tmp") std::filesystem::remove(entry.path(), ec);
-    write_file_atomically(dir_ / "summary.json", summary_.json(model_, RunStatus::failed, message));
+    write_file_atomically(dir_ / "summary.json", summary_.json(run_fields_, RunStatus::failed, message));
   } catch (...) {
     // summary.json still says "running", and no process holds the folder: readers see a run that
     // did not finish.

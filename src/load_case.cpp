@@ -1,6 +1,8 @@
 #include "indentsim/load_case.hpp"
 
 #include <algorithm>
+#include <functional>
+#include <optional>
 #include <cctype>
 #include <cmath>
 #include <fstream>
@@ -12,6 +14,7 @@
 #include <toml++/toml.h>
 
 #include "indentsim/error.hpp"
+#include "indentsim/version.hpp"
 
 namespace indentsim {
 
@@ -56,50 +59,58 @@ std::string to_string(HardeningLaw law) { return name_of(hardening_names, law); 
 
 namespace {
 
-// The schema: every section and key a load case may contain, and which are required.
-struct KeySpec {
+class Reader;
+
+/// One load-case key, declared once: how it is read and written, what it means, and whether a
+/// resumed run may change it.  The reader, the writer (to_toml), the resume check, `indentsim
+/// keys` and the README's key table all come from this one list (key_declarations()).
+struct KeyDeclaration {
+  const char* section;
   const char* name;
-  bool required;
-};
-struct SectionSpec {
-  const char* name;
-  bool required;
-  std::vector<KeySpec> keys;
+  const char* type;   ///< as `indentsim keys` shows it
+  std::string range;  ///< the values accepted, in words (validate() enforces them)
+  const char* unit;   ///< SI unit, or "" for a pure number, a word or a path
+  const char* help;
+  bool required = false;
+  /// Reads the key from the TOML table (when present) into the load case.
+  std::function<void(const Reader&, LoadCase&)> read;
+  /// The key's value as TOML text, or nothing when it is absent (an optional override unset).
+  std::function<std::optional<std::string>(const LoadCase&)> write;
+  /// Shown as a comment in case.toml, not as a key (a value derived from another key).
+  bool derived = false;
 };
 
-const std::vector<SectionSpec>& schema() {
-  static const std::vector<SectionSpec> sections = {
-      {"geometry", true, {{"lx", true}, {"ly", true}}},
-      {"punch", true, {{"radius", true}}},
-      {"material",
-       true,
-       {{"model", true}, {"E", true}, {"nu", true}, {"e0", false}, {"hardening", false},
-        {"kappa", false}, {"n", false}}},
-      {"load", true, {{"path", true}, {"increments", true}}},
-      {"mesh",
-       false,
-       {{"contact_nodes", false}, {"contact_half_width", false}, {"fine_width", false},
-        {"fine_depth", false}, {"growth", false}, {"element", false}}},
-      {"output",
-       false,
-       {{"dir", false}, {"fields_every", false}, {"profile_depths", false}, {"checkpoint_every", false},
-        {"keep_checkpoints", false}}},
-      {"solver", false, {{"tolerance", false}, {"max_newton", false}, {"max_cutbacks", false}, {"linear", false},
-                              {"far_field", false}, {"jacobian", false}}},
-  };
-  return sections;
+std::vector<std::string> section_names(const std::vector<KeyDeclaration>& keys) {
+  std::vector<std::string> names;
+  for (const auto& k : keys)
+    if (std::find(names.begin(), names.end(), k.section) == names.end()) names.emplace_back(k.section);
+  return names;
 }
 
-const SectionSpec* find_section(std::string_view name) {
-  for (const auto& s : schema())
-    if (name == s.name) return &s;
-  return nullptr;
+std::vector<std::string> key_names(const std::vector<KeyDeclaration>& keys, const std::string& section) {
+  std::vector<std::string> names;
+  for (const auto& k : keys)
+    if (section == k.section) names.emplace_back(k.name);
+  return names;
 }
 
-std::string known_keys(const SectionSpec& section) {
-  std::string list;
-  for (const auto& k : section.keys) list += (list.empty() ? "" : ", ") + std::string(k.name);
-  return list;
+std::string join(const std::vector<std::string>& words) {
+  std::string out;
+  for (const auto& w : words) out += (out.empty() ? "" : ", ") + w;
+  return out;
+}
+
+/// A double as TOML text: the shortest form that reads back to the same double, always a float.
+std::string toml_number(double value) {
+  std::string text = fmt::format("{}", value);
+  if (text.find_first_of(".eEn") == std::string::npos) text += ".0";  // "15" would read as an integer
+  return text;
+}
+
+std::string toml_numbers(const std::vector<double>& values) {
+  std::string s = "[";
+  for (std::size_t i = 0; i < values.size(); ++i) s += (i ? ", " : "") + toml_number(values[i]);
+  return s + "]";
 }
 
 class Reader {
@@ -110,35 +121,30 @@ public:
     throw InputError(source_, key, problem);
   }
 
-  void check_structure() const {
+  /// Every section and key present is declared; every required one is present.
+  void check_structure(const std::vector<KeyDeclaration>& keys) const {
+    const auto sections = section_names(keys);
     for (const auto& [name, node] : root_) {
       const std::string section_name(name.str());
-      const SectionSpec* spec = find_section(section_name);
-      if (!spec) {
-        std::string sections;
-        for (const auto& s : schema()) sections += (sections.empty() ? "" : ", ") + std::string(s.name);
-        fail(section_name, fmt::format("unknown section (known sections: {})", sections));
-      }
+      if (std::find(sections.begin(), sections.end(), section_name) == sections.end())
+        fail(section_name, fmt::format("unknown section (known sections: {})", join(sections)));
       const toml::table* table = node.as_table();
       if (!table) fail(section_name, "must be a table ([" + section_name + "])");
       for (const auto& [key, value] : *table) {
         const std::string key_name(key.str());
-        const bool known = std::any_of(spec->keys.begin(), spec->keys.end(),
-                                       [&](const KeySpec& k) { return key_name == k.name; });
+        const bool known = std::any_of(keys.begin(), keys.end(), [&](const KeyDeclaration& k) {
+          return section_name == k.section && key_name == k.name;
+        });
         if (!known)
           fail(section_name + "." + key_name,
-               fmt::format("unknown key (known keys of [{}]: {})", section_name, known_keys(*spec)));
+               fmt::format("unknown key (known keys of [{}]: {})", section_name, join(key_names(keys, section_name))));
       }
     }
-    for (const auto& section : schema()) {
-      const toml::table* table = root_[section.name].as_table();
-      if (!table) {
-        if (section.required) fail(section.name, "missing section");
-        continue;
-      }
-      for (const auto& key : section.keys)
-        if (key.required && !table->contains(key.name))
-          fail(std::string(section.name) + "." + key.name, "missing key");
+    for (const auto& key : keys) {
+      if (!key.required) continue;
+      const toml::table* table = root_[key.section].as_table();
+      if (!table) fail(key.section, "missing section");
+      if (!table->contains(key.name)) fail(std::string(key.section) + "." + key.name, "missing key");
     }
   }
 
@@ -182,20 +188,54 @@ public:
     target = *s;
   }
 
-  template <class E, std::size_t N>
-  void read_choice(const std::string& section, const std::string& key, const Choice<E> (&names)[N], E& target) const {
+  template <class E>
+  void read_choice(const std::string& section, const std::string& key, const Choice<E>* names, std::size_t count,
+                   E& target) const {
     std::string word;
     if (!find(section, key)) return;
     read_string(section, key, word);
     std::string known;
-    for (const auto& c : names) {
-      if (word == c.name) {
-        target = c.value;
+    for (std::size_t i = 0; i < count; ++i) {
+      if (word == names[i].name) {
+        target = names[i].value;
         return;
       }
-      known += (known.empty() ? "" : ", ") + std::string(c.name);
+      known += (known.empty() ? "" : ", ") + std::string(names[i].name);
     }
     fail(section + "." + key, fmt::format("\"{}\" is not one of: {}", printable(word, 60), known));
+  }
+
+  /// load.increments: a total, or one count per segment of the path.
+  void read_increments(LoadInput& load) const {
+    const toml::node* inc = find("load", "increments");
+    if (!inc || !inc->is_array()) {
+      read_integer("load", "increments", load.increments);
+      return;
+    }
+    const toml::array& counts = *inc->as_array();
+    load.segment_increments.clear();
+    int total = 0;
+    for (std::size_t i = 0; i < counts.size(); ++i) {
+      auto n = counts.get(i)->value_exact<int64_t>();
+      if (!n || *n < 1 || *n > 10'000'000) fail("load.increments", fmt::format("element {} must be an integer in [1, 1e7]", i));
+      load.segment_increments.push_back(static_cast<int>(*n));
+      total += static_cast<int>(*n);
+      if (total > 10'000'000) fail("load.increments", "more than 1e7 increments in all");
+    }
+    load.increments = total;
+  }
+
+  /// A count >= 1 or the word "all" (stored as 0).
+  void read_count_or_all(const std::string& section, const std::string& key, int& target) const {
+    const toml::node* node = find(section, key);
+    if (!node) return;
+    if (node->is_string()) {
+      if (node->value_exact<std::string>() != "all") fail(section + "." + key, "must be a count >= 1 or \"all\"");
+      target = 0;
+      return;
+    }
+    read_integer(section, key, target);
+    if (target < 1) fail(section + "." + key, fmt::format("must be a count >= 1 or \"all\" (got {})", target));
   }
 
   void read_number_array(const std::string& section, const std::string& key,
@@ -281,70 +321,201 @@ void apply_override(toml::table& root, const std::string& text, const std::strin
   table->insert_or_assign(key, value_text);
 }
 
+const std::vector<KeyDeclaration>& key_declarations();
+
 LoadCase from_table(const toml::table& root, const std::string& source) {
   Reader r(root, source);
-  r.check_structure();
+  const auto& keys = key_declarations();
+  r.check_structure(keys);
   LoadCase lc;
   lc.source = source;
-  r.read_number("geometry", "lx", lc.geometry.lx);
-  r.read_number("geometry", "ly", lc.geometry.ly);
-  r.read_number("punch", "radius", lc.punch.radius);
-
-  r.read_choice("material", "model", model_names, lc.material.model);
-  r.read_number("material", "E", lc.material.E);
-  r.read_number("material", "nu", lc.material.nu);
-  r.read_number("material", "e0", lc.material.e0);
-  r.read_choice("material", "hardening", hardening_names, lc.material.hardening);
-  r.read_number("material", "kappa", lc.material.kappa);
-  r.read_number("material", "n", lc.material.n);
-
-  r.read_number_array("load", "path", lc.load.path);
-  if (const toml::node* inc = r.find("load", "increments"); inc && inc->is_array()) {
-    const toml::array& counts = *inc->as_array();
-    lc.load.segment_increments.clear();
-    int total = 0;
-    for (std::size_t i = 0; i < counts.size(); ++i) {
-      auto n = counts.get(i)->value_exact<int64_t>();
-      if (!n || *n < 1 || *n > 10'000'000)
-        r.fail("load.increments", fmt::format("element {} must be an integer in [1, 1e7]", i));
-      lc.load.segment_increments.push_back(static_cast<int>(*n));
-      total += static_cast<int>(*n);
-      if (total > 10'000'000) r.fail("load.increments", "more than 1e7 increments in all");
-    }
-    lc.load.increments = total;
-  } else {
-    r.read_integer("load", "increments", lc.load.increments);
+  for (const auto& key : keys) key.read(r, lc);
+  // e0 or the uniaxial yield stress: exactly one may be given; the law works with e0.
+  if (r.find("material", "yield_stress")) {
+    if (r.find("material", "e0"))
+      r.fail("material.yield_stress", "give either material.e0 or material.yield_stress, not both");
+    if (!(*lc.material.yield_stress > 0.0))
+      r.fail("material.yield_stress", fmt::format("must be > 0 (got {})", *lc.material.yield_stress));
+    lc.material.e0 = e0_of_yield_stress(*lc.material.yield_stress, lc.material.E, lc.material.nu);
   }
-
-  r.read_integer("mesh", "contact_nodes", lc.mesh.contact_nodes);
-  r.read_choice("mesh", "element", element_names, lc.mesh.element);
-  r.read_optional_number("mesh", "contact_half_width", lc.mesh.contact_half_width);
-  r.read_optional_number("mesh", "fine_width", lc.mesh.fine_width);
-  r.read_optional_number("mesh", "fine_depth", lc.mesh.fine_depth);
-  r.read_optional_number("mesh", "growth", lc.mesh.growth);
-
-  r.read_string("output", "dir", lc.output.dir);
-  r.read_integer("output", "fields_every", lc.output.fields_every);
-  r.read_number_array("output", "profile_depths", lc.output.profile_depths);
-  r.read_integer("output", "checkpoint_every", lc.output.checkpoint_every);
-  if (const toml::node* keep = r.find("output", "keep_checkpoints"); keep && keep->is_string()) {
-    if (keep->value_exact<std::string>() != "all")
-      r.fail("output.keep_checkpoints", "must be a count >= 1 or \"all\"");
-    lc.output.keep_checkpoints = 0;
-  } else {
-    r.read_integer("output", "keep_checkpoints", lc.output.keep_checkpoints);
-    if (keep && lc.output.keep_checkpoints < 1)
-      r.fail("output.keep_checkpoints", fmt::format("must be a count >= 1 or \"all\" (got {})", lc.output.keep_checkpoints));
-  }
-
-  r.read_number("solver", "tolerance", lc.solver.tolerance);
-  r.read_choice("solver", "linear", linear_names, lc.solver.linear);
-  r.read_choice("solver", "far_field", far_field_names, lc.solver.far_field);
-  r.read_choice("solver", "jacobian", jacobian_names, lc.solver.jacobian);
-  r.read_integer("solver", "max_newton", lc.solver.max_newton);
-  r.read_integer("solver", "max_cutbacks", lc.solver.max_cutbacks);
   validate(lc);
   return lc;
+}
+
+// The declarations, section by section in the order case.toml shows them.
+template <class Access>
+KeyDeclaration number_key(KeyDeclaration k, Access access) {
+  const std::string section = k.section, name = k.name;
+  k.read = [=](const Reader& r, LoadCase& lc) { r.read_number(section, name, access(lc)); };
+  k.write = [=](const LoadCase& lc) -> std::optional<std::string> { return toml_number(access(lc)); };
+  return k;
+}
+template <class Access>
+KeyDeclaration optional_number_key(KeyDeclaration k, Access access) {
+  const std::string section = k.section, name = k.name;
+  k.read = [=](const Reader& r, LoadCase& lc) { r.read_optional_number(section, name, access(lc)); };
+  k.write = [=](const LoadCase& lc) -> std::optional<std::string> {
+    const auto& value = access(lc);
+    if (!value) return std::nullopt;
+    return toml_number(*value);
+  };
+  return k;
+}
+template <class Access>
+KeyDeclaration integer_key(KeyDeclaration k, Access access) {
+  const std::string section = k.section, name = k.name;
+  k.read = [=](const Reader& r, LoadCase& lc) { r.read_integer(section, name, access(lc)); };
+  k.write = [=](const LoadCase& lc) -> std::optional<std::string> { return std::to_string(access(lc)); };
+  return k;
+}
+template <class Access>
+KeyDeclaration numbers_key(KeyDeclaration k, Access access) {
+  const std::string section = k.section, name = k.name;
+  k.read = [=](const Reader& r, LoadCase& lc) { r.read_number_array(section, name, access(lc)); };
+  k.write = [=](const LoadCase& lc) -> std::optional<std::string> { return toml_numbers(access(lc)); };
+  return k;
+}
+template <class E, std::size_t N, class Access>
+KeyDeclaration choice_key(KeyDeclaration k, const Choice<E> (&names)[N], Access access) {
+  const std::string section = k.section, name = k.name;
+  const Choice<E>* words = names;
+  std::vector<std::string> accepted;
+  for (std::size_t i = 0; i < N; ++i) accepted.emplace_back(fmt::format("\"{}\"", names[i].name));
+  k.range = "one of " + join(accepted);
+  k.read = [=](const Reader& r, LoadCase& lc) { r.read_choice(section, name, words, N, access(lc)); };
+  k.write = [=](const LoadCase& lc) -> std::optional<std::string> {
+    for (std::size_t i = 0; i < N; ++i)
+      if (words[i].value == access(lc)) return fmt::format("\"{}\"", words[i].name);
+    return std::nullopt;
+  };
+  return k;
+}
+
+const std::vector<KeyDeclaration>& key_declarations() {
+  static const std::vector<KeyDeclaration> keys = [] {
+    std::vector<KeyDeclaration> k;
+    k.push_back(number_key({"geometry", "lx", "number", "> 0", "m",
+                            "half width of the block (plane strain: the model is the half x >= 0 of a symmetric block)",
+                            true},
+                           [](auto& c) -> auto& { return c.geometry.lx; }));
+    k.push_back(number_key({"geometry", "ly", "number", "> 0, > the deepest depth", "m", "depth of the block (its base is clamped)", true},
+                           [](auto& c) -> auto& { return c.geometry.ly; }));
+    k.push_back(number_key({"punch", "radius", "number", "> 0, > the deepest depth", "m", "punch radius R (a rigid cylinder)", true},
+                           [](auto& c) -> auto& { return c.punch.radius; }));
+    k.push_back(choice_key({"material", "model", "choice", "", "",
+                            "elastic; ilyushin (deformation theory, the paper's); j2 (flow theory)", true},
+                           model_names, [](auto& c) -> auto& { return c.material.model; }));
+    k.push_back(number_key({"material", "E", "number", "[1e-100, 1e100]", "Pa", "Young's modulus", true},
+                           [](auto& c) -> auto& { return c.material.E; }));
+    k.push_back(number_key({"material", "nu", "number", "(-1, 0.5)", "", "Poisson's ratio", true},
+                           [](auto& c) -> auto& { return c.material.nu; }));
+    k.push_back(number_key({"material", "e0", "number", "(0, 1)", "",
+                            "elastic limit of the strain intensity e_u; the uniaxial yield stress is sigma_y = 3 mu e0 "
+                            "= E e0 3 / (2 (1 + nu)) (give e0 or yield_stress, not both)"},
+                           [](auto& c) -> auto& { return c.material.e0; }));
+    {
+      KeyDeclaration ys{"material", "yield_stress", "number", "> 0", "Pa",
+                        "uniaxial yield stress sigma_y, instead of e0 (e0 = sigma_y / (3 mu))"};
+      ys.read = [](const Reader& r, LoadCase& lc) { r.read_optional_number("material", "yield_stress", lc.material.yield_stress); };
+      ys.write = [](const LoadCase& lc) -> std::optional<std::string> {
+        return toml_number(lc.material.yield_stress.value_or(yield_stress_of_e0(lc.material.e0, lc.material.E, lc.material.nu)));
+      };
+      ys.derived = true;
+      k.push_back(ys);
+    }
+    k.push_back(choice_key({"material", "hardening", "choice", "", "",
+                            "linear: omega = kappa (1 - e0/e_u); power: omega = 1 - (e0/e_u)^(1-n)"},
+                           hardening_names, [](auto& c) -> auto& { return c.material.hardening; }));
+    k.push_back(number_key({"material", "kappa", "number", "[0, 1)", "",
+                            "linear law: post-yield slope of sigma_u(e_u) is (1 - kappa) 3 mu"},
+                           [](auto& c) -> auto& { return c.material.kappa; }));
+    k.push_back(number_key({"material", "n", "number", "(0, 1)", "", "power law: sigma_u grows as e_u^n beyond e0"},
+                           [](auto& c) -> auto& { return c.material.n; }));
+    k.push_back(numbers_key({"load", "path", "array of numbers", "from 0, each >= 0", "m",
+                             "depth waypoints alpha, piecewise linear; may go down (unload, separate) and up again", true},
+                            [](auto& c) -> auto& { return c.load.path; }));
+    {
+      KeyDeclaration inc{"load", "increments", "integer or array of integers", "[1, 1e7] in all", "",
+                         "increments along the whole path (spread by path length), or one count per segment", true};
+      inc.read = [](const Reader& r, LoadCase& lc) { r.read_increments(lc.load); };
+      inc.write = [](const LoadCase& lc) -> std::optional<std::string> {
+        if (lc.load.segment_increments.empty()) return std::to_string(lc.load.increments);
+        std::string text = "[";
+        for (std::size_t i = 0; i < lc.load.segment_increments.size(); ++i)
+          text += fmt::format("{}{}", i ? ", " : "", lc.load.segment_increments[i]);
+        return text + "]";
+      };
+      k.push_back(inc);
+    }
+    k.push_back(choice_key({"mesh", "element", "choice", "", "",
+                            "q1 (the paper's exact element), bbar (mean dilatation, locking-free), auto (B-bar when "
+                            "nu >= 0.45 or kappa > 0.95 or n < 0.1)"},
+                           element_names, [](auto& c) -> auto& { return c.mesh.element; }));
+    k.push_back(integer_key({"mesh", "contact_nodes", "integer", ">= 2", "",
+                             "fine-zone elements across the estimated final contact half-width (raise it to buy "
+                             "accuracy)"},
+                            [](auto& c) -> auto& { return c.mesh.contact_nodes; }));
+    k.push_back(optional_number_key({"mesh", "contact_half_width", "number", "> 0", "m",
+                                     "override of the estimate a* that sizes the mesh (default: Hertz, or a pilot run)"},
+                                    [](auto& c) -> auto& { return c.mesh.contact_half_width; }));
+    k.push_back(optional_number_key({"mesh", "fine_width", "number", "> 0", "m", "override: width of the uniform zone (default 1.5 a*)"},
+                                    [](auto& c) -> auto& { return c.mesh.fine_width; }));
+    k.push_back(optional_number_key({"mesh", "fine_depth", "number", "> 0", "m", "override: depth of the uniform zone (default 1.5 a*)"},
+                                    [](auto& c) -> auto& { return c.mesh.fine_depth; }));
+    k.push_back(optional_number_key({"mesh", "growth", "number", "[1, 2]", "",
+                                     "override: growth ratio of the far field (default 1 + 2.5 / contact_nodes)"},
+                                    [](auto& c) -> auto& { return c.mesh.growth; }));
+    {
+      KeyDeclaration dir{"output", "dir", "string", "not empty", "", "output folder (relative to the working directory)"};
+      dir.read = [](const Reader& r, LoadCase& lc) { r.read_string("output", "dir", lc.output.dir); };
+      dir.write = [](const LoadCase& lc) -> std::optional<std::string> {
+        std::ostringstream text;
+        text << toml::value<std::string>(lc.output.dir);
+        return text.str();
+      };
+      k.push_back(dir);
+    }
+    k.push_back(integer_key({"output", "fields_every", "integer", ">= 0", "",
+                             "write a VTU every N increments (0: the final state only)"},
+                            [](auto& c) -> auto& { return c.output.fields_every; }));
+    k.push_back(numbers_key({"output", "profile_depths", "array of numbers", "within [0, ly]", "m",
+                             "depths of the stress profiles besides the surface"},
+                            [](auto& c) -> auto& { return c.output.profile_depths; }));
+    k.push_back(integer_key({"output", "checkpoint_every", "integer", ">= 0", "",
+                             "checkpoint at increments numbered a multiple of N, at every peak and valley and at the "
+                             "end (0: reversals and signals only)"},
+                            [](auto& c) -> auto& { return c.output.checkpoint_every; }));
+    {
+      KeyDeclaration keep{"output", "keep_checkpoints", "integer or \"all\"", ">= 1", "",
+                          "newest checkpoints kept; every peak's and valley's are kept besides"};
+      keep.read = [](const Reader& r, LoadCase& lc) { r.read_count_or_all("output", "keep_checkpoints", lc.output.keep_checkpoints); };
+      keep.write = [](const LoadCase& lc) -> std::optional<std::string> {
+        return lc.output.keep_checkpoints == 0 ? std::string("\"all\"") : std::to_string(lc.output.keep_checkpoints);
+      };
+      k.push_back(keep);
+    }
+    k.push_back(number_key({"solver", "tolerance", "number", "[1e-14, 1e-2)", "",
+                            "residual max-norm relative to E* times the deepest depth"},
+                           [](auto& c) -> auto& { return c.solver.tolerance; }));
+    k.push_back(integer_key({"solver", "max_newton", "integer", "[1, 1000]", "", "Newton iterations per attempt"},
+                            [](auto& c) -> auto& { return c.solver.max_newton; }));
+    k.push_back(integer_key({"solver", "max_cutbacks", "integer", "[0, 60]", "", "halvings of one increment before the run stops"},
+                            [](auto& c) -> auto& { return c.solver.max_cutbacks; }));
+    k.push_back(choice_key({"solver", "linear", "choice", "", "",
+                            "klu (SuiteSparse KLU), cholmod (supernodal Cholesky), auto (CHOLMOD above 1000 unknowns "
+                            "of the Newton system)"},
+                           linear_names, [](auto& c) -> auto& { return c.solver.linear; }));
+    k.push_back(choice_key({"solver", "far_field", "choice", "", "",
+                            "condense (Newton solves the near field, the elastic far field condensed exactly), full "
+                            "(the whole mesh), auto (condense unless the near field is over 80% of the unknowns)"},
+                           far_field_names, [](auto& c) -> auto& { return c.solver.far_field; }));
+    k.push_back(choice_key({"solver", "jacobian", "choice", "", "",
+                            "reuse (a converging iteration may keep the last factorization), fresh (factor every "
+                            "iteration)"},
+                           jacobian_names, [](auto& c) -> auto& { return c.solver.jacobian; }));
+    return k;
+  }();
+  return keys;
 }
 
 LoadCase parse_and_override(const std::string& text, const std::string& source,
@@ -447,46 +618,69 @@ void validate(const LoadCase& lc) {
 }
 
 std::string to_toml(const LoadCase& lc) {
-  const auto numbers = [](const std::vector<double>& v) {
-    std::string s = "[";
-    for (std::size_t i = 0; i < v.size(); ++i) s += fmt::format("{}{:.17g}", i ? ", " : "", v[i]);
-    return s + "]";
-  };
-  std::string t = fmt::format("# The load case as run (from {}), every key explicit.\n", lc.source);
-  t += fmt::format("[geometry]\nlx = {:.17g}\nly = {:.17g}\n\n", lc.geometry.lx, lc.geometry.ly);
-  t += fmt::format("[punch]\nradius = {:.17g}\n\n", lc.punch.radius);
-  t += fmt::format("[material]\nmodel = \"{}\"\nE = {:.17g}\nnu = {:.17g}\ne0 = {:.17g}\nhardening = \"{}\"\n"
-                   "kappa = {:.17g}\nn = {:.17g}\n\n",
-                   to_string(lc.material.model), lc.material.E, lc.material.nu, lc.material.e0,
-                   to_string(lc.material.hardening), lc.material.kappa, lc.material.n);
-  std::string increments = std::to_string(lc.load.increments);
-  if (!lc.load.segment_increments.empty()) {
-    increments = "[";
-    for (std::size_t i = 0; i < lc.load.segment_increments.size(); ++i)
-      increments += fmt::format("{}{}", i ? ", " : "", lc.load.segment_increments[i]);
-    increments += "]";
+  std::string t = fmt::format("# The load case as run (from {}), every key explicit.\n# Written by {}.\n",
+                              printable(lc.source, 400), version_line());
+  std::string section;
+  for (const auto& key : key_declarations()) {
+    if (section != key.section) {
+      t += fmt::format("{}[{}]\n", section.empty() ? "" : "\n", key.section);
+      section = key.section;
+    }
+    const std::optional<std::string> value = key.write(lc);
+    if (!value) continue;
+    if (key.derived) t += fmt::format("# {} = {}  ({}: derived, shown for reference)\n", key.name, *value, key.unit);
+    else t += fmt::format("{} = {}\n", key.name, *value);
   }
-  t += fmt::format("[load]\npath = {}\nincrements = {}\n\n", numbers(lc.load.path), increments);
-  t += fmt::format("[mesh]\nelement = \"{}\"\ncontact_nodes = {}\n", name_of(element_names, lc.mesh.element),
-                   lc.mesh.contact_nodes);
-  if (lc.mesh.contact_half_width) t += fmt::format("contact_half_width = {:.17g}\n", *lc.mesh.contact_half_width);
-  if (lc.mesh.fine_width) t += fmt::format("fine_width = {:.17g}\n", *lc.mesh.fine_width);
-  if (lc.mesh.fine_depth) t += fmt::format("fine_depth = {:.17g}\n", *lc.mesh.fine_depth);
-  if (lc.mesh.growth) t += fmt::format("growth = {:.17g}\n", *lc.mesh.growth);
-  toml::table dir_table{{"dir", lc.output.dir}};
-  std::ostringstream dir_line;
-  dir_line << dir_table;
-  t += fmt::format("\n[output]\n{}\nfields_every = {}\nprofile_depths = {}\ncheckpoint_every = {}\n"
-                   "keep_checkpoints = {}\n\n",
-                   dir_line.str(), lc.output.fields_every, numbers(lc.output.profile_depths),
-                   lc.output.checkpoint_every,
-                   lc.output.keep_checkpoints == 0 ? std::string("\"all\"") : std::to_string(lc.output.keep_checkpoints));
-  t += fmt::format("[solver]\ntolerance = {:.17g}\nmax_newton = {}\nmax_cutbacks = {}\nlinear = \"{}\"\n"
-                   "far_field = \"{}\"\njacobian = \"{}\"\n",
-                   lc.solver.tolerance, lc.solver.max_newton, lc.solver.max_cutbacks,
-                   name_of(linear_names, lc.solver.linear), name_of(far_field_names, lc.solver.far_field),
-                   name_of(jacobian_names, lc.solver.jacobian));
   return t;
+}
+
+double yield_stress_of_e0(double e0, double E, double nu) { return 3.0 * (E / (2.0 * (1.0 + nu))) * e0; }
+double e0_of_yield_stress(double yield_stress, double E, double nu) {
+  return yield_stress / (3.0 * (E / (2.0 * (1.0 + nu))));
+}
+
+std::string keys_markdown() {
+  std::string t = "| key | type | default | accepted | unit | meaning |\n|---|---|---|---|---|---|\n";
+  for (const auto& k : describe_keys()) {
+    const auto cell = [](std::string text) {
+      std::string out;
+      for (char c : text) out += c == '|' ? std::string("\\|") : std::string(1, c);
+      return out;
+    };
+    t += fmt::format("| `{}` | {} | {} | {} | {} | {} |\n", k.key, cell(k.type),
+                     k.required ? "required" : "`" + cell(k.default_value) + "`", cell(k.range), k.unit.empty() ? "" : k.unit,
+                     cell(k.help));
+  }
+  return t;
+}
+
+std::vector<KeyDescription> describe_keys() {
+  const LoadCase defaults;
+  std::vector<KeyDescription> out;
+  for (const auto& key : key_declarations()) {
+    KeyDescription d;
+    d.key = std::string(key.section) + "." + key.name;
+    d.type = key.type;
+    d.range = key.range;
+    d.unit = key.unit;
+    d.help = key.help;
+    d.required = key.required;
+    if (key.required) d.default_value = "required";
+    else if (key.derived) d.default_value = "from e0";
+    else d.default_value = key.write(defaults).value_or("(computed)");
+    out.push_back(d);
+  }
+  return out;
+}
+
+std::string first_physics_difference(const LoadCase& a, const LoadCase& b) {
+  for (const auto& key : key_declarations()) {
+    const std::string section = key.section;
+    if (section != "geometry" && section != "punch" && section != "material" && section != "mesh") continue;
+    if (key.derived) continue;
+    if (key.write(a) != key.write(b)) return section + "." + key.name;
+  }
+  return "";
 }
 
 LoadCase parse_load_case(const std::string& toml_text, const std::string& source,

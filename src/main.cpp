@@ -23,6 +23,7 @@
 #include "indentsim/load_case.hpp"
 #include "indentsim/run_folder.hpp"
 #include "indentsim/simulation.hpp"
+#include "indentsim/version.hpp"
 
 namespace fs = std::filesystem;
 using namespace indentsim;
@@ -110,9 +111,11 @@ void print_mesh(const Simulation& sim) {
 int command_check(const std::string& file, const std::vector<std::string>& overrides) {
   const LoadCase lc = read_load_case(file, overrides);
   inspect_output_dir(lc.output.dir, lc.source);
-  const MeshPlan p = plan_mesh(lc);
-  fmt::print("{}: valid; model {}, depth up to {:.4g} m in {} increments; mesh {} x {} nodes ({} unknowns)\n", file,
-             to_string(lc.material.model), lc.max_depth(), lc.load.increments, p.nodes_x, p.nodes_y, p.unknowns());
+  const MeshPlan p = plan_run(lc).mesh;  // the plan run uses, pilot included
+  for (const auto& warning : plausibility_warnings(lc, p)) fmt::print(stderr, "warning: {}\n", warning);
+  fmt::print("{}: valid; model {}, depth up to {:.4g} m in {} increments; mesh {} x {} nodes, {} unknowns\n", file,
+             to_string(lc.material.model), lc.max_depth(), lc.load.increments, p.nodes_x, p.nodes_y,
+             Mesh::from_plan(lc, p).equations());
   return 0;
 }
 
@@ -261,11 +264,27 @@ int command_resume(const std::string& argument, const std::vector<std::string>& 
   return drive(*run.simulation, output, file.string(), quiet);
 }
 
+
+int command_keys(bool markdown) {
+  if (markdown) {
+    fmt::print("{}", keys_markdown());
+    return 0;
+  }
+  for (const auto& k : describe_keys()) {
+    fmt::print("{}  ({}{}{})\n", k.key, k.type, k.unit.empty() ? "" : ", " + k.unit,
+               k.required ? ", required" : ", default " + k.default_value);
+    if (!k.range.empty()) fmt::print("    accepted: {}\n", k.range);
+    fmt::print("    {}\n", k.help);
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"indentsim: plane-strain indentation of an elasto-plastic block by a rigid cylindrical punch"};
   app.require_subcommand(1);
+  app.set_version_flag("--version", version_line());
   std::string file, out;
   std::vector<std::string> overrides;
   bool quiet = false;
@@ -290,15 +309,32 @@ int main(int argc, char** argv) {
       ->take_all();
   resume->add_flag("--quiet,-q", quiet, "print nothing but warnings and errors (no progress line)");
 
+  bool markdown = false;
+  CLI::App* keys = app.add_subcommand("keys", "list every load-case key: type, default, accepted values, unit, meaning");
+  keys->add_flag("--markdown", markdown, "as the README's Markdown table");
+
   CLI::App* check = app.add_subcommand("check", "validate a load case without solving");
   check->add_option("case", file, "load case (TOML)")->required();
   check->add_option("--set", overrides, "override one key: section.key=value (repeat for more)")
       ->allow_extra_args(false)
       ->take_all();
 
+  // An unknown command is named, with the real ones (CLI11 would only say one is required).
+  const auto subcommands = app.get_subcommands([](CLI::App*) { return true; });
+  const bool known = argc > 1 && std::any_of(subcommands.begin(), subcommands.end(),
+                                             [&](const CLI::App* sub) { return sub->get_name() == argv[1]; });
+  if (argc > 1 && argv[1][0] != '-' && !known) {
+    std::string commands;
+    for (const CLI::App* sub : subcommands) commands += (commands.empty() ? "" : ", ") + sub->get_name();
+    fmt::print(stderr, "error: \"{}\" is not an indentsim command (commands: {}; see indentsim --help)\n",
+               printable(argv[1], 60), commands);
+    return exit_bad_input;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
     app.exit(e);
@@ -313,6 +349,7 @@ int main(int argc, char** argv) {
     for (CLI::App* command : {run, resume})
       if (command->parsed() && command->get_option("--out")->count() > 0 && out.empty())
         throw InputError("--out", "--out", "must name a folder (it is empty)");
+    if (keys->parsed()) return command_keys(markdown);
     if (run->parsed()) return command_run(file, overrides, out, quiet);
     if (resume->parsed()) return list ? command_list_checkpoints(file) : command_resume(file, overrides, out, quiet);
     return command_check(file, overrides);

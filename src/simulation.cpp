@@ -21,6 +21,8 @@ namespace {
 // milliseconds and KLU, the user's default, is kept.
 constexpr int cholmod_crossover_unknowns = 1000;
 constexpr double max_relative_depth = 0.05;  // alpha / R beyond which the run warns
+constexpr double max_relative_contact = 0.1;  // a / lx and a / ly beyond which the run warns
+constexpr double min_plausible_modulus = 1e3, max_plausible_modulus = 2e12;  // [Pa]
 
 // Plastic scenes spread their contact wider than the elastic Hertz estimate, up to the punch's
 // chord sqrt(2 R alpha) when the material flows freely.  A coarse pilot run of the same load
@@ -130,6 +132,45 @@ NearField choose_near_field(const LoadCase& lc, const Mesh& mesh, const MeshPlan
 
 }  // namespace
 
+std::vector<std::string> plausibility_warnings(const LoadCase& lc, const MeshPlan& plan) {
+  std::vector<std::string> warnings;
+  // Unit slips: a modulus given in GPa or MPa instead of Pa runs, and gives forces 1e6-1e9 off.
+  if (lc.material.E < min_plausible_modulus || lc.material.E > max_plausible_modulus)
+    warnings.push_back(fmt::format("material.E = {:g} Pa is outside the moduli of solids ({:g} Pa to {:g} Pa): "
+                                   "pascals are meant (210 GPa is 210e9)",
+                                   lc.material.E, min_plausible_modulus, max_plausible_modulus));
+  // The model is small-strain with the gap measured vertically (docs/MODEL.md): both need slopes
+  // and depths small against the punch radius.
+  const double relative_depth = lc.max_depth() / lc.punch.radius;
+  if (relative_depth > max_relative_depth)
+    warnings.push_back(fmt::format("the depth reaches {:.3g} R: the small-strain contact model (vertical gap, "
+                                   "small slopes) is being pushed beyond its range (alpha / R up to {:.2g}); "
+                                   "read the results as qualitative",
+                                   relative_depth, max_relative_depth));
+  // A contact that is not small against the specimen: its edges and base shape P well beyond the
+  // discretization error (README, "Choosing the specimen").
+  const double a = plan.contact_half_width_estimate;
+  for (const auto& [key, size] : {std::pair<const char*, double>{"geometry.lx", lc.geometry.lx}, {"geometry.ly", lc.geometry.ly}})
+    if (a > max_relative_contact * size)
+      warnings.push_back(fmt::format("the contact half-width (about {:.3g} m) is {:.2g} of {} = {:.3g} m: the "
+                                     "specimen's edges change P far beyond the discretization error (keep a / {} "
+                                     "below {:g}; is punch.radius in metres?)",
+                                     a, a / size, key, size, key, max_relative_contact));
+  return warnings;
+}
+
+RunPlan plan_run(const LoadCase& load_case, std::optional<double> planned_contact_half_width) {
+  RunPlan plan{plan_mesh(load_case), std::nullopt};  // also refuses a mesh too large before any work
+  if (planned_contact_half_width) {
+    plan.mesh = plan_mesh(load_case, planned_contact_half_width);
+  } else if (load_case.material.model != MaterialModel::elastic && !load_case.mesh.contact_half_width) {
+    const PilotResult pilot = pilot_run(load_case);
+    plan.mesh = plan_mesh(load_case, pilot.contact_half_width);
+    plan.plastic_zone = pilot.plastic_zone;
+  }
+  return plan;
+}
+
 Simulation::Simulation(LoadCase load_case, std::optional<double> planned_contact_half_width,
                        std::optional<NearField> near_field)
     : load_case_(std::move(load_case)) {
@@ -142,15 +183,9 @@ Simulation::Simulation(LoadCase load_case, std::optional<double> planned_contact
       throw InputError(load_case_.source, m.hardening == HardeningLaw::linear ? "material.kappa" : "material.n",
                        *violation);
   }
-  plan_ = plan_mesh(load_case_);  // also refuses a mesh too large before any work
-  std::optional<PlasticExtent> pilot_plastic_zone;
-  if (planned_contact_half_width) {
-    plan_ = plan_mesh(load_case_, planned_contact_half_width);
-  } else if (law && !load_case_.mesh.contact_half_width) {
-    const PilotResult pilot = pilot_run(load_case_);
-    plan_ = plan_mesh(load_case_, pilot.contact_half_width);
-    pilot_plastic_zone = pilot.plastic_zone;
-  }
+  const RunPlan run_plan = plan_run(load_case_, planned_contact_half_width);
+  plan_ = run_plan.mesh;
+  const std::optional<PlasticExtent>& pilot_plastic_zone = run_plan.plastic_zone;
   mesh_ = std::make_unique<Mesh>(Mesh::from_plan(load_case_, plan_));
   mesh_->set_element_kind(choose_element(load_case_));
   pattern_ = std::make_unique<StiffnessPattern>(*mesh_);
@@ -176,14 +211,8 @@ Simulation::Simulation(LoadCase load_case, std::optional<double> planned_contact
 
   u_.assign(static_cast<std::size_t>(mesh_->equations()), 0.0);
 
-  // The model is small-strain with the gap measured vertically (MODEL.md): both need slopes and
-  // depths small against the punch radius.
-  const double relative_depth = load_case_.max_depth() / load_case_.punch.radius;
-  if (relative_depth > max_relative_depth)
-    warnings_.push_back(fmt::format("the depth reaches {:.3g} R: the small-strain contact model (vertical gap, "
-                                    "small slopes) is being pushed beyond its range (alpha / R up to {:.2g}); "
-                                    "read the results as qualitative",
-                                    relative_depth, max_relative_depth));
+  const std::vector<std::string> implausible = plausibility_warnings(load_case_, plan_);
+  warnings_.insert(warnings_.end(), implausible.begin(), implausible.end());
 }
 
 Simulation::~Simulation() = default;

@@ -98,7 +98,7 @@ TEST_F(RunFolderCli, ASecondRunIntoAFolderInUseExits2AndTheFirstFinishesIntact) 
   EXPECT_TRUE(std::isdigit(static_cast<unsigned char>(second_err[at + 40]))) << second_err;
   EXPECT_EQ(slurp(dir_ / "first.status"), "0\n") << slurp(dir_ / "first.out");
   EXPECT_EQ(rows(out / "curve.csv"), 5001);
-  EXPECT_NE(slurp(out / "case.toml").find("E = 210000000000\n"), std::string::npos);
+  EXPECT_NE(slurp(out / "case.toml").find("E = 210000000000.0\n"), std::string::npos);
   EXPECT_EQ(status(out), "finished");
 }
 
@@ -125,7 +125,7 @@ TEST_F(RunFolderCli, ARerunThatDoesNotFinishLeavesOnlyItsOwnFiles) {
                 "--set output.fields_every=1 --set output.checkpoint_every=1 --out " + out.string(),
                 "INDENTSIM_FAULT=increment:3"),
             128 + SIGKILL);
-  EXPECT_NE(slurp(out / "case.toml").find("E = 70000000000\n"), std::string::npos);
+  EXPECT_NE(slurp(out / "case.toml").find("E = 70000000000.0\n"), std::string::npos);
   EXPECT_EQ(status(out), "running");
   EXPECT_FALSE(fs::exists(out / "layers.csv"));
   EXPECT_FALSE(fs::exists(out / "profiles.csv"));
@@ -133,7 +133,7 @@ TEST_F(RunFolderCli, ARerunThatDoesNotFinishLeavesOnlyItsOwnFiles) {
   for (const auto& name : files_in(out / "checkpoints")) EXPECT_LE(name, "checkpoint_000002.ck");
   // Resuming the folder continues the new run (E = 70 GPa), not the old one.
   ASSERT_EQ(cli("resume " + out.string() + " --quiet"), 0) << err();
-  EXPECT_NE(slurp(out / "case.toml").find("E = 70000000000\n"), std::string::npos);
+  EXPECT_NE(slurp(out / "case.toml").find("E = 70000000000.0\n"), std::string::npos);
   EXPECT_EQ(status(out), "finished");
   ASSERT_EQ(cli("run " + elastic + " --quiet --set mesh.contact_nodes=6 --set load.increments=6 --set material.E=70e9 "
                 "--out " + (dir_ / "reference").string()),

@@ -61,10 +61,6 @@ struct CheckpointSchedule {
 std::filesystem::path save_checkpoint(const std::filesystem::path& dir, const Checkpoint& checkpoint,
                                       const CheckpointSchedule& schedule);
 
-/// The first key among the physics and mesh keys (geometry, punch, material, mesh) where two
-/// load cases differ, or "" if they agree: what a resumed run may not change.
-std::string first_physics_difference(const LoadCase& a, const LoadCase& b);
-
 /// Whether two load cases describe the same run: the same physics and mesh (first_physics_difference)
 /// and the same load path and increments.  Output and solver keys may differ.
 bool same_run(const LoadCase& a, const LoadCase& b);

@@ -53,7 +53,8 @@ public:
 
   /// Feed every converged increment in order, with Simulation::free_surface_depth() at it.
   void add(const IncrementRecord& record, double free_surface_depth);
-  std::string json(const std::string& model, RunStatus status, const std::string& message) const;
+  /// `run_fields`: JSON members (each line ending with a comma) about the run itself.
+  std::string json(const std::string& run_fields, RunStatus status, const std::string& message) const;
   const std::vector<Unloading>& unloadings() const { return unloadings_; }
   double peak_depth() const { return peak_depth_; }
   double peak_force() const { return peak_force_; }
@@ -93,7 +94,7 @@ private:
   void write_fields(const Simulation& sim, int step);
 
   std::filesystem::path dir_;
-  std::string model_;
+  std::string run_fields_;
   LoadHistorySummary summary_;
   std::vector<IncrementRecord> records_;
   std::vector<double> depths_;

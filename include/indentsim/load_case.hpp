@@ -25,6 +25,8 @@ struct MaterialInput {
   double E = 210e9;   ///< Young's modulus [Pa]
   double nu = 0.3;    ///< Poisson's ratio [-]
   double e0 = 0.027;  ///< elastic limit of the strain intensity [-]
+  /// The uniaxial yield stress when the load case gave it instead of e0 [Pa] (e0 is then derived).
+  std::optional<double> yield_stress;
   HardeningLaw hardening = HardeningLaw::linear;
   double kappa = 0.9;  ///< linear law: omega = kappa (1 - e0/e_u)
   double n = 0.3;      ///< power law: sigma_u ~ e_u^n
@@ -100,6 +102,26 @@ void validate(const LoadCase& load_case);
 
 /// The load case as TOML (every key, defaults filled in): what a run actually used.
 std::string to_toml(const LoadCase& load_case);
+
+/// The uniaxial yield stress of Ilyushin's law: sigma_y = sigma_u(e0) = 3 mu e0, mu = E / (2 (1 + nu)).
+double yield_stress_of_e0(double e0, double E, double nu);
+/// Its inverse, e0 = sigma_y / (3 mu): how material.yield_stress becomes e0.
+double e0_of_yield_stress(double yield_stress, double E, double nu);
+
+/// One load-case key as `indentsim keys` and the README describe it.
+struct KeyDescription {
+  std::string key;            ///< section.name
+  std::string type, default_value, range, unit, help;
+  bool required = false;
+};
+/// Every key a load case accepts, in case.toml's order, from the same declarations the reader uses.
+std::vector<KeyDescription> describe_keys();
+/// The keys as a Markdown table (the README's).
+std::string keys_markdown();
+
+/// The first key among the physics and mesh keys (geometry, punch, material, mesh) where two
+/// load cases differ, or "" if they agree: what a resumed run may not change.
+std::string first_physics_difference(const LoadCase& a, const LoadCase& b);
 
 std::string to_string(MaterialModel model);
 std::string to_string(HardeningLaw law);

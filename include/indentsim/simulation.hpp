@@ -36,6 +36,19 @@ struct SimulationState {
   NearField near_field;               ///< what the Newton iterations solve for (it may have grown)
 };
 
+/// The mesh a run uses: planned from the Hertz estimate of the contact, or for a plastic case
+/// from a coarse pilot run of the same case (its contact width and plastic zone); `check` prints
+/// exactly this plan.  `planned_contact_half_width` (a resumed run) skips the pilot.
+struct RunPlan {
+  MeshPlan mesh;
+  std::optional<PlasticExtent> plastic_zone;  ///< from the pilot, sizes the condensed near field
+};
+RunPlan plan_run(const LoadCase& load_case, std::optional<double> planned_contact_half_width = std::nullopt);
+
+/// Warnings (not errors) about values that run but are probably a slip: E outside 1 kPa - 2 TPa,
+/// alpha / R > 0.05, an estimated contact half-width above 0.1 of lx or ly.
+std::vector<std::string> plausibility_warnings(const LoadCase& load_case, const MeshPlan& plan);
+
 class Simulation {
 public:
   /// Throws InputError when the load case asks for a model not available or a mesh too large.
