@@ -1,19 +1,25 @@
 #!/usr/bin/env python3
 """Figures of an indentsim run.
 
-    python3 plots/plot_results.py OUTDIR [--zoom Z]
+    indentsim plot OUTDIR [--step N]          (or: python3 plots/plot_results.py OUTDIR [--step N])
 
-Reads OUTDIR/case.toml, curve.csv, profiles.csv and the last VTU of fields.pvd, and writes PNG and
-SVG files into OUTDIR/figures/:
-  curve          the P-alpha curve (elastic runs: also the P-a relation against Hertz line contact)
+Reads OUTDIR/case.toml, curve.csv, summary.json, profiles.csv and the VTU of one increment from
+fields.pvd -- by default the deepest state of the load path, which indentsim always writes (a
+history that ends unloaded has nothing to show at its end) -- and writes PNG and SVG files into
+OUTDIR/figures/:
+  curve          the P-alpha curve, loading and unloading branches in their own colours, the peak,
+                 the unloading stiffness S as a tangent and the residual depth h_f marked (elastic
+                 runs: also the P-a relation against Hertz line contact)
   pressure       the contact pressure from the layer forces against Hertz for the same force
   profiles       sigma_N and sigma_T along the surface and the chosen depths (the paper's Fig. 5):
                  lines from the local stiffness rows, markers from Gauss-point stresses
-  plastic_zone   strain intensity e_u / e0 and the yielded region under the punch (the paper's Fig. 6)
+  plastic_zone   strain intensity e_u / e0 on the deformed mesh, the outline of the yielded region
+                 and the punch where it stands (the paper's Fig. 6); the window follows the zone
 Needs Debian's python3-matplotlib (installed by scripts/install-deps.sh).
 """
 import argparse
 import csv
+import json
 import math
 import pathlib
 import sys
@@ -44,15 +50,51 @@ def hertz_force(a, radius, e_star):
     return math.pi * e_star * a * a / (4 * radius)
 
 
-def plot_curve(case, curve, outdir):
+def case_name(case_text):
+    """The load case's file name, from case.toml's first comment line "(from PATH)"."""
+    first = case_text.splitlines()[0] if case_text else ""
+    if "(from " in first:
+        return pathlib.Path(first.split("(from ", 1)[1].split(")", 1)[0]).stem
+    return "run"
+
+
+def branches(curve):
+    """Consecutive runs of rows going the same way: [(loading?, rows)], each run sharing its first row."""
+    out = []
+    for k in range(1, len(curve)):
+        loading = float(curve[k]["alpha"]) >= float(curve[k - 1]["alpha"])
+        if not out or out[-1][0] != loading:
+            out.append((loading, [curve[k - 1]]))
+        out[-1][1].append(curve[k])
+    return out
+
+
+def plot_curve(case, name, curve, summary, outdir):
     elastic = case["material"]["model"] == "elastic"
-    fig, axes = plt.subplots(1, 2 if elastic else 1, figsize=(11 if elastic else 5.5, 4.2), squeeze=False)
+    fig, axes = plt.subplots(1, 2 if elastic else 1, figsize=(11 if elastic else 6, 4.4), squeeze=False)
     ax = axes[0][0]
-    ax.plot([float(r["alpha"]) * 1e6 for r in curve], [float(r["P"]) / 1e3 for r in curve], "o-", ms=3)
+    drawn = set()
+    style = {"loading": ("tab:blue", "-", 2), "unloading": ("tab:orange", "-", 3), "reloading": ("tab:green", "--", 4)}
+    for k, (loading, rows) in enumerate(branches(curve)):
+        label = "unloading" if not loading else ("loading" if k == 0 else "reloading")
+        color, line, order = style[label]
+        ax.plot([float(r["alpha"]) * 1e6 for r in rows], [float(r["P"]) / 1e3 for r in rows], "o", ls=line, ms=3,
+                color=color, zorder=order, label=None if label in drawn else label)
+        drawn.add(label)
+    peak = max(curve, key=lambda r: float(r["P"]))
+    ax.plot(float(peak["alpha"]) * 1e6, float(peak["P"]) / 1e3, "k*", ms=10, label="peak")
+    for u in summary.get("unloading", []):
+        h, p, stiffness = u["depth"], u["force"], u["stiffness"]
+        if stiffness > 0:
+            h0 = h - p / stiffness  # where the tangent at the reversal meets P = 0
+            ax.plot([h0 * 1e6, h * 1e6], [0, p / 1e3], "k--", lw=0.8, label=f"S = {stiffness:.3g} N/m per m")
+        if u.get("separated") and u.get("residual_depth") is not None:
+            ax.plot(u["residual_depth"] * 1e6, 0, "rv", ms=8, label=f"h_f = {u['residual_depth'] * 1e6:.3g} µm")
     ax.set_xlabel("indentation depth α [µm]")
     ax.set_ylabel("punch force P [kN/m]")
-    ax.set_title(f"P–α curve ({case['material']['model']})")
+    ax.set_title(f"{name}: P–α ({case['material']['model']})")
     ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
     if elastic:
         e_star = case["material"]["E"] / (1 - case["material"]["nu"] ** 2)
         radius = case["punch"]["radius"]
@@ -65,23 +107,26 @@ def plot_curve(case, curve, outdir):
                 label="indentsim")
         ax.set_xlabel("contact half-width a [µm]")
         ax.set_ylabel("punch force P [kN/m]")
-        ax.set_title("P–a against Hertz")
+        ax.set_title(f"{name}: P–a against Hertz")
         ax.legend()
         ax.grid(alpha=0.3)
     save(fig, outdir, "curve")
 
 
-def plot_pressure(case, curve, profiles, outdir):
-    top = max(int(r["line"]) for r in profiles)
-    surface = [r for r in profiles if int(r["line"]) == top]
-    force = float(curve[-1]["P"])
-    a = float(curve[-1]["a"])
+def plot_pressure(case, name, row, profiles, surface_from_vtu, outdir):
+    force = float(row["P"])
+    a = float(row["a"])
+    if profiles:
+        top = max(int(r["line"]) for r in profiles)
+        surface = [(float(r["x"]), -float(r["sigmaN_layer"])) for r in profiles if int(r["line"]) == top]
+        source = "layer forces"
+    else:
+        surface, source = surface_from_vtu, "nodal contact pressure"
     e_star = case["material"]["E"] / (1 - case["material"]["nu"] ** 2)
     radius = case["punch"]["radius"]
     fig, ax = plt.subplots(figsize=(5.5, 4.2))
-    xs = [float(r["x"]) for r in surface if float(r["x"]) <= 1.6 * max(a, 1e-300)]
-    ps = [-float(r["sigmaN_layer"]) for r in surface if float(r["x"]) <= 1.6 * max(a, 1e-300)]
-    ax.plot([x * 1e6 for x in xs], [p / 1e6 for p in ps], "o", ms=4, label="indentsim (layer forces)")
+    shown = [(x, p) for x, p in surface if x <= 1.6 * max(a, 1e-300)]
+    ax.plot([x * 1e6 for x, _ in shown], [p / 1e6 for _, p in shown], "o", ms=4, label=f"indentsim ({source})")
     if force > 0:
         a_h = math.sqrt(4 * force * radius / (math.pi * e_star))
         p0 = 2 * force / (math.pi * a_h)
@@ -90,14 +135,14 @@ def plot_pressure(case, curve, profiles, outdir):
                 label="Hertz, same P")
     ax.set_xlabel("x [µm]")
     ax.set_ylabel("contact pressure p [MPa]")
-    ax.set_title(f"Contact pressure at α = {float(curve[-1]['alpha']) * 1e6:.3g} µm")
+    ax.set_title(f"{name}: contact pressure at α = {float(row['alpha']) * 1e6:.3g} µm (step {row['step']})")
     ax.legend()
     ax.grid(alpha=0.3)
     save(fig, outdir, "pressure")
 
 
-def plot_profiles(curve, profiles, outdir):
-    a = float(curve[-1]["a"])
+def plot_profiles(name, row, profiles, outdir):
+    a = float(row["a"])
     lines = sorted({int(r["line"]) for r in profiles}, reverse=True)
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
     for line in lines:
@@ -113,18 +158,19 @@ def plot_profiles(curve, profiles, outdir):
     axes[1].set_ylabel("σ_T ≈ σ12 [MPa]")
     for ax, title in zip(axes, ("normal stress σ_N", "tangential stress σ_T")):
         ax.set_xlabel("x [mm]")
-        ax.set_title(title)
+        ax.set_title(f"{name}: {title} at α = {float(row['alpha']) * 1e6:.3g} µm")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
     save(fig, outdir, "profiles")
 
 
-def last_vtu(outdir):
+def vtu_of_step(outdir, step):
     collection = ET.parse(outdir / "fields.pvd").getroot().find("Collection")
-    files = [d.get("file") for d in collection.findall("DataSet")]
-    if not files:
-        sys.exit(f"{outdir}/fields.pvd lists no data sets")
-    return outdir / files[-1]
+    written = {int(d.get("timestep")): d.get("file") for d in collection.findall("DataSet")}
+    if step not in written:
+        sys.exit(f"{outdir}: no fields were written for step {step} (written: {sorted(written)}; "
+                 "output.fields_every chooses more)")
+    return outdir / written[step]
 
 
 def read_vtu(path):
@@ -137,63 +183,93 @@ def read_vtu(path):
         raise KeyError(name)
 
     points = array("Points", "coordinates")
+    u = array("PointData", "displacement")
     xy = [(points[3 * k], points[3 * k + 1]) for k in range(len(points) // 3)]
+    deformed = [(x + u[3 * k], y + u[3 * k + 1]) for k, (x, y) in enumerate(xy)]
     connectivity = [int(v) for v in array("Cells", "connectivity")]
     quads = [connectivity[4 * e:4 * e + 4] for e in range(len(connectivity) // 4)]
-    return xy, quads, array("CellData", "strain_intensity"), array("CellData", "plastic")
+    pressure = array("PointData", "contact_pressure")
+    top = max(y for _, y in xy)
+    surface = sorted((x, p) for (x, y), p in zip(xy, pressure) if y == top)
+    return {"xy": xy, "deformed": deformed, "quads": quads, "e_u": array("CellData", "strain_intensity"),
+            "plastic": array("CellData", "plastic"), "surface_pressure": surface}
 
 
-def plot_plastic_zone(case, curve, rundir, outdir):
-    xy, quads, e_u, plastic = read_vtu(last_vtu(rundir))
+def yielded_outline(quads, plastic):
+    """The edges between yielded and elastic elements (or the mesh boundary): the zone's outline."""
+    edges = {}
+    for quad, flag in zip(quads, plastic):
+        for k in range(4):
+            edge = tuple(sorted((quad[k], quad[(k + 1) % 4])))
+            edges.setdefault(edge, []).append(flag > 0)
+    return [edge for edge, flags in edges.items() if any(flags) and not all(flags) or flags == [True]]
+
+
+def plot_plastic_zone(case, name, row, fields, outdir):
+    xy, deformed, quads = fields["xy"], fields["deformed"], fields["quads"]
     e0 = case["material"]["e0"]
-    a = max(float(curve[-1]["a"]), 1e-300)
-    window = 3 * a
-    polys, values, yielded = [], [], []
-    for quad, value, flag in zip(quads, e_u, plastic):
-        corners = [xy[n] for n in quad]
-        if min(c[0] for c in corners) > window or max(c[1] for c in corners) < -window:
+    a = max(float(row["a"]), 1e-300)
+    outline = yielded_outline(quads, fields["plastic"])
+    # The window follows the zone: the contact and the yielded region, with a margin.
+    reach = max([a] + [max(abs(xy[n][0]), abs(xy[n][1])) for edge in outline for n in edge])
+    window = 1.3 * reach if outline else 3 * a
+    polys, values = [], []
+    for quad, value in zip(quads, fields["e_u"]):
+        if min(xy[n][0] for n in quad) > window or max(xy[n][1] for n in quad) < -window:
             continue
-        polys.append([(c[0] * 1e3, c[1] * 1e3) for c in corners])
+        polys.append([(deformed[n][0] * 1e3, deformed[n][1] * 1e3) for n in quad])
         values.append(value / e0)
-        yielded.append(flag)
     fig, ax = plt.subplots(figsize=(6.5, 5))
     cells = PolyCollection(polys, array=values, cmap="viridis", edgecolors="face", linewidths=0.2)
     ax.add_collection(cells)
     fig.colorbar(cells, ax=ax, label="strain intensity e_u / e0")
-    outline = [p for p, f in zip(polys, yielded) if f > 0]
-    if outline:
-        ax.add_collection(PolyCollection(outline, facecolors="none", edgecolors="white", linewidths=0.3))
+    for k, (n1, n2) in enumerate(outline):
+        ax.plot([deformed[n1][0] * 1e3, deformed[n2][0] * 1e3], [deformed[n1][1] * 1e3, deformed[n2][1] * 1e3], "w-",
+                lw=1.2, label="yielded region" if k == 0 else None)
     radius = case["punch"]["radius"]
-    alpha = float(curve[-1]["alpha"])
-    xs = [window * k / 100 for k in range(101) if window * k / 100 < radius]
+    alpha = float(row["alpha"])
+    xs = [window * k / 200 for k in range(201) if window * k / 200 < radius]
     ax.plot([x * 1e3 for x in xs], [(-alpha + radius - math.sqrt(radius**2 - x**2)) * 1e3 for x in xs], "r-",
-            lw=1.2, label="punch")
+            lw=1.5, label="punch")
     ax.set_xlim(0, window * 1e3)
     ax.set_ylim(-window * 1e3, 0.15 * window * 1e3)
     ax.set_aspect("equal")
-    ax.set_xlabel("x [mm]")
-    ax.set_ylabel("y [mm]")
-    count = int(sum(1 for f in plastic if f > 0))
-    ax.set_title(f"Plastic zone (white outline: {count} yielded elements)")
-    ax.legend(loc="lower right")
+    ax.set_xlabel("x [mm] (deformed)")
+    ax.set_ylabel("y [mm] (deformed)")
+    count = int(sum(1 for f in fields["plastic"] if f > 0))
+    ax.set_title(f"{name}: α = {alpha * 1e6:.3g} µm, {count} yielded elements")
+    ax.legend(loc="lower right", fontsize=7)
     save(fig, outdir, "plastic_zone")
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("outdir", type=pathlib.Path)
+    parser.add_argument("--step", type=int, help="the increment to show (default: the deepest of the load path)")
     args = parser.parse_args()
     outdir = args.outdir
-    with open(outdir / "case.toml", "rb") as f:
-        case = tomllib.load(f)
+    case_text = (outdir / "case.toml").read_text()
+    case = tomllib.loads(case_text)
+    name = case_name(case_text)
     curve = read_csv(outdir / "curve.csv")
-    profiles = read_csv(outdir / "profiles.csv")
+    summary = json.loads((outdir / "summary.json").read_text()) if (outdir / "summary.json").is_file() else {}
+    step = args.step if args.step is not None else int(max(curve, key=lambda r: float(r["alpha"]))["step"])
+    rows = [r for r in curve if int(r["step"]) == step]
+    if not rows:
+        sys.exit(f"{outdir}: the run has no step {step} (steps 0 to {curve[-1]['step']})")
+    row = rows[0]
+    profiles = [r for r in read_csv(outdir / "profiles.csv") if int(r["step"]) == step]
+    fields = read_vtu(vtu_of_step(outdir, step))
     figures = outdir / "figures"
     figures.mkdir(exist_ok=True)
-    plot_curve(case, curve, figures)
-    plot_pressure(case, curve, profiles, figures)
-    plot_profiles(curve, profiles, figures)
-    plot_plastic_zone(case, curve, outdir, figures)
+    plot_curve(case, name, curve, summary, figures)
+    plot_pressure(case, name, row, profiles, fields["surface_pressure"], figures)
+    if profiles:
+        plot_profiles(name, row, profiles, figures)
+    else:
+        print(f"no layer view tabulated for step {step} (profiles.csv holds the deepest and the final state): "
+              "no profiles figure")
+    plot_plastic_zone(case, name, row, fields, figures)
 
 
 if __name__ == "__main__":

@@ -43,14 +43,15 @@ NodalStresses average_to_nodes(const Mesh& mesh, const BulkModel& bulk) {
   return nodal;
 }
 
-std::string layers_csv(const std::vector<LayerForce>& layers, double punch_force) {
-  std::string out = "line,y,P_minus,P_plus,mismatch,P\n";
+std::string layers_csv(const std::vector<LayerForce>& layers, double punch_force, const FieldFrame& frame, bool header) {
+  std::string out = header ? "step,alpha,line,y,P_minus,P_plus,mismatch,P\n" : "";
   for (std::size_t j = 0; j < layers.size(); ++j) {
     const auto& l = layers[j];
     // Mismatch between the two sides of an interior line (the paper's P+ vs P-), relative to P.
     const double mismatch =
         std::isnan(l.below) || std::isnan(l.above) ? 0.0 : (l.below - l.above) / std::max(punch_force, 1e-300);
-    out += fmt::format("{},{:.17g},{:.17g},{:.17g},{:.6e},{:.17g}\n", j, l.y, l.below, l.above, mismatch, punch_force);
+    out += fmt::format("{},{:.17g},{},{:.17g},{:.17g},{:.17g},{:.6e},{:.17g}\n", frame.step, frame.alpha, j, l.y, l.below,
+                       l.above, mismatch, punch_force);
   }
   return out;
 }
@@ -67,11 +68,12 @@ std::vector<int> profile_lines(const Mesh& mesh, const std::vector<double>& dept
 }
 
 std::string profiles_csv(const Mesh& mesh, const std::vector<int>& lines, const std::vector<NodalLayerForces>& layer,
-                         const NodalStresses& nodal) {
+                         const NodalStresses& nodal, const FieldFrame& frame, bool header) {
   // sigmaN_layer = sigma_N^- / w ~ sigma22 and sigmaT_layer = sigma_T^- / w ~ sigma12 just below
   // the line (from the local stiffness rows); the *_nodal columns are the Gauss-point stresses
   // averaged to the node.  The two views agree as the mesh is refined.
-  std::string out = "line,y,x,sigmaN_layer,sigmaT_layer,sigma22_nodal,sigma12_nodal,sigma11_nodal,e_u_nodal\n";
+  std::string out =
+      header ? "step,alpha,line,y,x,sigmaN_layer,sigmaT_layer,sigma22_nodal,sigma12_nodal,sigma11_nodal,e_u_nodal\n" : "";
   for (int j : lines)
     for (int i = 0; i < mesh.nodes_x(); ++i) {
       const int n = mesh.node(i, j);
@@ -80,7 +82,8 @@ std::string profiles_csv(const Mesh& mesh, const std::vector<int>& lines, const 
       // On the axis the u row carries the symmetry condition's reaction, not a stress: sigma12
       // vanishes there by symmetry.
       const double tangential = i == 0 ? 0.0 : layer[n].tangential_below / w;
-      out += fmt::format("{},{:.10g},{:.10g},{:.10g},{:.10g},{:.10g},{:.10g},{:.10g},{:.10g}\n", j, mesh.y(j),
+      out += fmt::format("{},{:.17g},{},{:.10g},{:.10g},{:.10g},{:.10g},{:.10g},{:.10g},{:.10g},{:.10g}\n", frame.step,
+                         frame.alpha, j, mesh.y(j),
                          mesh.x(i), layer[n].normal_below / w, tangential, s[1], s[2], s[0], s[4]);
     }
   return out;

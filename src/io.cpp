@@ -133,7 +133,8 @@ RunOutput::RunOutput(const std::filesystem::path& dir, const LoadCase& load_case
       fields_every_(load_case.output.fields_every),
       profile_depths_(load_case.output.profile_depths),
       curve_(dir / "curve.csv"),
-      fields_(dir) {
+      fields_(dir),
+      deepest_depth_(load_case.max_depth()) {
   write_file_atomically(dir_ / "case.toml", to_toml(load_case));
   write_file_atomically(dir_ / "summary.json", summary_.json(run_fields_, RunStatus::running, ""));
   for (std::size_t k = 0; k < replay_curve.size(); ++k) {
@@ -149,6 +150,9 @@ RunOutput::RunOutput(const std::filesystem::path& dir, const LoadCase& load_case
       fields_.add_existing(r.step, vtu);
       last_fields_step_ = r.step;
     }
+    // The deepest state passed before the checkpoint: its fields are on disk, its tables are not
+    // (they are computed from a live state).
+    if (r.alpha == deepest_depth_ && peak_step_ < 0 && r.step > 0) peak_step_ = r.step;
   }
 }
 
@@ -160,6 +164,22 @@ void RunOutput::increment(const Simulation& sim, const IncrementRecord& record) 
   depths_.push_back(depth);
   last_step_ = record.step;
   if (fields_every_ > 0 && record.step % fields_every_ == 0) write_fields(sim, record.step);
+  // The deepest state is what figures show by default (a history may end unloaded, with nothing
+  // to see): its fields are always written and its layer view kept for the tables.
+  if (record.alpha == deepest_depth_ && peak_step_ < 0 && record.step > 0) {
+    peak_step_ = record.step;
+    if (last_fields_step_ != record.step) write_fields(sim, record.step);
+    peak_tables_ = layer_tables(sim, record.step, true);
+  }
+}
+
+std::pair<std::string, std::string> RunOutput::layer_tables(const Simulation& sim, int step, bool header) const {
+  const auto& mesh = sim.mesh();
+  const auto layer = nodal_layer_forces(mesh, sim.bulk());
+  const FieldFrame frame{step, sim.alpha()};
+  return {layers_csv(layer_forces(mesh, layer), sim.contact().force, frame, header),
+          profiles_csv(mesh, profile_lines(mesh, profile_depths_), layer, average_to_nodes(mesh, sim.bulk()), frame,
+                       header)};
 }
 
 void RunOutput::write_fields(const Simulation& sim, int step) {
@@ -172,11 +192,10 @@ void RunOutput::write_fields(const Simulation& sim, int step) {
 void RunOutput::finish(const Simulation& sim, RunStatus status, const std::string& message) {
   if (last_step_ >= 0) {
     if (last_fields_step_ != last_step_) write_fields(sim, last_step_);
-    const auto& mesh = sim.mesh();
-    const auto layer = nodal_layer_forces(mesh, sim.bulk());
-    write_file_atomically(dir_ / "layers.csv", layers_csv(layer_forces(mesh, layer), sim.contact().force));
-    write_file_atomically(dir_ / "profiles.csv", profiles_csv(mesh, profile_lines(mesh, profile_depths_), layer,
-                                                             average_to_nodes(mesh, sim.bulk())));
+    const bool peak_apart = !peak_tables_.first.empty() && peak_step_ != last_step_;
+    const auto [layers, profiles] = layer_tables(sim, last_step_, !peak_apart);
+    write_file_atomically(dir_ / "layers.csv", peak_apart ? peak_tables_.first + layers : layers);
+    write_file_atomically(dir_ / "profiles.csv", peak_apart ? peak_tables_.second + profiles : profiles);
   }
   write_file_atomically(dir_ / "summary.json", summary_.json(run_fields_, status, message));
 }

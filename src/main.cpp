@@ -4,6 +4,9 @@
 // operating system's reason is printed; the folder is marked failed), 128 + signal when stopped
 // by SIGINT or SIGTERM (after checkpointing), 1 anything else.
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <optional>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
@@ -265,6 +268,30 @@ int command_resume(const std::string& argument, const std::vector<std::string>& 
 }
 
 
+/// `indentsim plot DIR [--step N]`: the figure script beside this executable, run by Debian's
+/// python3 (the one the setup script gives matplotlib), whatever python3 comes first on the PATH.
+int command_plot(const std::string& dir, const std::optional<int>& step) {
+  std::error_code ec;
+  const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+  const fs::path script = self.parent_path() / "plot_results.py";
+  if (ec || !fs::is_regular_file(script))
+    throw InputError(dir, "plot", fmt::format("the figure script is not beside the executable (looked for {})",
+                                              script.string()));
+  if (!fs::is_directory(dir)) throw InputError(dir, "plot", "is not a run's output folder");
+  const std::string python = fs::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
+  std::vector<std::string> args{python, script.string(), dir};
+  if (step) {
+    args.push_back("--step");
+    args.push_back(std::to_string(*step));
+  }
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  std::fflush(stdout);
+  ::execvp(argv[0], argv.data());
+  throw InputError(dir, "plot", fmt::format("cannot run {}: {}", python, std::strerror(errno)));
+}
+
 int command_keys(bool markdown) {
   if (markdown) {
     fmt::print("{}", keys_markdown());
@@ -309,6 +336,11 @@ int main(int argc, char** argv) {
       ->take_all();
   resume->add_flag("--quiet,-q", quiet, "print nothing but warnings and errors (no progress line)");
 
+  std::optional<int> plot_step;
+  CLI::App* plot = app.add_subcommand("plot", "write the figures of a run into DIR/figures (PNG and SVG)");
+  plot->add_option("dir", file, "the run's output folder")->required();
+  plot->add_option("--step", plot_step, "the increment to show (default: the deepest of the load path)");
+
   bool markdown = false;
   CLI::App* keys = app.add_subcommand("keys", "list every load-case key: type, default, accepted values, unit, meaning");
   keys->add_flag("--markdown", markdown, "as the README's Markdown table");
@@ -350,6 +382,7 @@ int main(int argc, char** argv) {
       if (command->parsed() && command->get_option("--out")->count() > 0 && out.empty())
         throw InputError("--out", "--out", "must name a folder (it is empty)");
     if (keys->parsed()) return command_keys(markdown);
+    if (plot->parsed()) return command_plot(file, plot_step);
     if (run->parsed()) return command_run(file, overrides, out, quiet);
     if (resume->parsed()) return list ? command_list_checkpoints(file) : command_resume(file, overrides, out, quiet);
     return command_check(file, overrides);

@@ -14,6 +14,7 @@ Runs a small plastic case with fields at every increment, then checks that
 Prints 'N passed, N failed' and exits non-zero on any failure.
 """
 import csv
+import os
 import pathlib
 import subprocess
 import sys
@@ -113,6 +114,21 @@ def main():
         check(all(b > a for a, b in zip(times, times[1:])), "load_unload: pvd times not strictly increasing")
         check(sum(1 for r in rows if float(r["alpha"]) == 0.0) >= 2, "load_unload: the path returns to alpha = 0")
 
+        # A history that ends unloaded: the deepest state's fields and layer view are written, and
+        # the figures show it by default.
+        unloaded = pathlib.Path(tmp) / "unloaded"
+        run = subprocess.run([str(executable), "run", str(source / "loadcases" / "load_unload.toml"), "--quiet",
+                              "--out", str(unloaded), "--set", "mesh.contact_nodes=6", "--set", "load.path=[0, 5e-5, 0]",
+                              "--set", "load.increments=[4, 4]"], capture_output=True, text=True)
+        check(run.returncode == 0, f"indentsim run (unloaded end) failed: {run.stderr}")
+        with open(unloaded / "profiles.csv", newline="") as f:
+            steps = sorted({int(r["step"]) for r in csv.DictReader(f)})
+        check(steps == [4, 8], f"profiles.csv holds steps {steps}, expected the peak (4) and the end (8)")
+        check((unloaded / "fields" / "step_000004.vtu").is_file(), "the peak's fields were not written")
+        plot = subprocess.run([str(executable), "plot", str(unloaded)], capture_output=True, text=True)
+        check(plot.returncode == 0, f"indentsim plot (unloaded end) failed: {plot.stderr}")
+        check("α = 50 µm" in (unloaded / "figures" / "pressure.svg").read_text(), "the pressure figure is not the peak's")
+
         with open(out / "layers.csv", newline="") as f:
             layers = list(csv.DictReader(f))
         check(len(layers) > 10 and {"y", "P_minus", "P_plus", "mismatch"} <= set(layers[0]), "layers.csv columns")
@@ -123,9 +139,16 @@ def main():
               "profiles.csv columns")
         check((out / "case.toml").is_file(), "case.toml missing")
 
-        plot = subprocess.run([sys.executable, str(source / "plots" / "plot_results.py"), str(out)],
-                              capture_output=True, text=True)
-        check(plot.returncode == 0, f"plot_results.py failed: {plot.stderr}")
+        # The README's command, exactly: `indentsim plot DIR`, with a python3 first on the PATH that
+        # has no matplotlib (as on machines where python3 is not Debian's).
+        fake_bin = pathlib.Path(tmp) / "fake_bin"
+        fake_bin.mkdir()
+        (fake_bin / "python3").write_text("#!/bin/sh\necho \"ModuleNotFoundError: No module named 'matplotlib'\" >&2\n"
+                                          "exit 1\n")
+        (fake_bin / "python3").chmod(0o755)
+        environment = dict(os.environ, PATH=f"{fake_bin}:{os.environ.get('PATH', '')}")
+        plot = subprocess.run([str(executable), "plot", str(out)], capture_output=True, text=True, env=environment)
+        check(plot.returncode == 0, f"indentsim plot failed: {plot.stderr}")
         for name in ("curve", "pressure", "profiles", "plastic_zone"):
             for suffix in ("png", "svg"):
                 figure = out / "figures" / f"{name}.{suffix}"

@@ -24,18 +24,20 @@ struct NodalStresses {
 };
 NodalStresses average_to_nodes(const Mesh& mesh, const BulkModel& bulk);
 
-std::string layers_csv(const std::vector<LayerForce>& layers, double punch_force);
-
-/// Mesh lines of the profiles: the top surface and, for each depth, the nearest mesh line.
-std::vector<int> profile_lines(const Mesh& mesh, const std::vector<double>& depths);
-std::string profiles_csv(const Mesh& mesh, const std::vector<int>& lines, const std::vector<NodalLayerForces>& layer,
-                         const NodalStresses& nodal);
-
-/// Which state a VTU shows: the increment and its depth (written as the file's field data).
+/// Which state a table or a VTU shows: the increment and its depth (columns `step`, `alpha` of
+/// layers.csv and profiles.csv; field data of a VTU).
 struct FieldFrame {
   int step = 0;
   double alpha = 0.0;
 };
+
+/// The layer forces of one state; `header` starts the table with its column names.
+std::string layers_csv(const std::vector<LayerForce>& layers, double punch_force, const FieldFrame& frame, bool header);
+
+/// Mesh lines of the profiles: the top surface and, for each depth, the nearest mesh line.
+std::vector<int> profile_lines(const Mesh& mesh, const std::vector<double>& depths);
+std::string profiles_csv(const Mesh& mesh, const std::vector<int>& lines, const std::vector<NodalLayerForces>& layer,
+                         const NodalStresses& nodal, const FieldFrame& frame, bool header);
 
 /// A VTK XML unstructured grid of the current state.
 std::string vtu_document(const FieldFrame& frame, const Mesh& mesh, const double* u, const BulkModel& bulk,

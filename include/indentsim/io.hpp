@@ -70,7 +70,8 @@ private:
 ///   case.toml      the load case as run (every key explicit);
 ///   curve.csv      one row per converged increment (CurveWriter);
 ///   fields.pvd, fields/step_*.vtu   every output.fields_every increments and the final state;
-///   layers.csv, profiles.csv        the paper's layer view of the final state;
+///   layers.csv, profiles.csv        the paper's layer view of the deepest state (the peak of the
+///                  load path) and of the final state, one block each (columns step, alpha);
 ///   summary.json   the run's status; peak, unloading stiffness and residual depth of each
 ///                  unloading branch.
 /// The folder is expected to be held (RunFolder) and cleared of an earlier run's files.
@@ -92,6 +93,8 @@ public:
 
 private:
   void write_fields(const Simulation& sim, int step);
+  /// The layer view of the simulation's current state: {layers.csv rows, profiles.csv rows}.
+  std::pair<std::string, std::string> layer_tables(const Simulation& sim, int step, bool header) const;
 
   std::filesystem::path dir_;
   std::string run_fields_;
@@ -103,6 +106,9 @@ private:
   CurveWriter curve_;
   FieldSeries fields_;
   int last_step_ = -1, last_fields_step_ = -1;
+  double deepest_depth_ = 0.0;  ///< the load path's deepest waypoint
+  int peak_step_ = -1;          ///< the increment that reached it (its fields and tables are kept)
+  std::pair<std::string, std::string> peak_tables_;
 };
 
 }  // namespace indentsim
