@@ -105,10 +105,17 @@ void LoadHistorySummary::add(const IncrementRecord& r, double free_surface_depth
   previous_ = r;
 }
 
-std::string LoadHistorySummary::json(const std::string& run_fields, RunStatus status, const std::string& message) const {
+std::string LoadHistorySummary::json(const std::string& run_fields, RunStatus status, const std::string& message,
+                                     const PhaseTimes& times) const {
   std::string out = fmt::format("{{\n  \"status\": \"{}\",\n", to_string(status));
   if (!message.empty()) out += fmt::format("  \"message\": {},\n", json_string(message));
   out += run_fields;
+  if (!times.phases().empty()) {
+    out += "  \"time_s\": {";
+    for (std::size_t k = 0; k < times.phases().size(); ++k)
+      out += fmt::format("{}\"{}\": {:.6f}", k ? ", " : "", times.phases()[k].first, times.phases()[k].second);
+    out += "},\n";
+  }
   out += fmt::format("  \"increments\": {},\n  \"peak_depth\": {:.17g},\n"
                      "  \"peak_force\": {:.17g},\n  \"unloading\": [",
                      previous_ ? previous_->step : 0, peak_depth_, peak_force_);
@@ -189,7 +196,7 @@ void RunOutput::write_fields(const Simulation& sim, int step) {
   last_fields_step_ = step;
 }
 
-void RunOutput::finish(const Simulation& sim, RunStatus status, const std::string& message) {
+void RunOutput::finish(const Simulation& sim, RunStatus status, const std::string& message, const PhaseTimes& times) {
   if (last_step_ >= 0) {
     if (last_fields_step_ != last_step_) write_fields(sim, last_step_);
     const bool peak_apart = !peak_tables_.first.empty() && peak_step_ != last_step_;
@@ -197,7 +204,7 @@ void RunOutput::finish(const Simulation& sim, RunStatus status, const std::strin
     write_file_atomically(dir_ / "layers.csv", peak_apart ? peak_tables_.first + layers : layers);
     write_file_atomically(dir_ / "profiles.csv", peak_apart ? peak_tables_.second + profiles : profiles);
   }
-  write_file_atomically(dir_ / "summary.json", summary_.json(run_fields_, status, message));
+  write_file_atomically(dir_ / "summary.json", summary_.json(run_fields_, status, message, times));
 }
 
 void RunOutput::fail(const std::string& message) noexcept {

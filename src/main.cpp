@@ -151,14 +151,20 @@ int drive(Simulation& sim, RunOutput& output, const std::string& label, bool qui
     std::string message;
     try {
       sim.run([&](const IncrementRecord& r) {
-        output.increment(sim, r);
-        inject_fault("increment");
+        {
+          const PhaseTimes::Scope timing = sim.times().measure("output");
+          output.increment(sim, r);
+          inject_fault("increment");
+          if (schedule.due(r.step)) checkpoint();
+        }
         show_warnings();
         progress.update(r);
-        if (schedule.due(r.step)) checkpoint();
         if (const int signal = interruption_requested()) throw Interrupted(signal);
       });
-      if (lc.output.checkpoint_every > 0 && last_checkpoint != output.records().back().step) checkpoint();
+      if (lc.output.checkpoint_every > 0 && last_checkpoint != output.records().back().step) {
+        const PhaseTimes::Scope timing = sim.times().measure("output");
+        checkpoint();
+      }
     } catch (const SolverError& e) {
       progress.clear_line();
       fmt::print(stderr, "{}: {}\n", label, e.what());
@@ -175,7 +181,10 @@ int drive(Simulation& sim, RunOutput& output, const std::string& label, bool qui
       message = fmt::format("stopped by signal {}; resume with: indentsim resume {}", i.signal(), file.string());
     }
     progress.finish();
-    output.finish(sim, status, message);
+    {
+      const PhaseTimes::Scope timing = sim.times().measure("output");
+      output.finish(sim, status, message, sim.times());
+    }
     show_warnings();
     if (!quiet) {
       if (sim.near_field_growths() > 0) {
@@ -184,6 +193,9 @@ int drive(Simulation& sim, RunOutput& output, const std::string& label, bool qui
       }
       fmt::print("largest condition estimate of a Newton matrix: {:.3g} ({})\n", sim.largest_condition_estimate(),
                  sim.linear_solver() == LinearSolverKind::cholmod ? "CHOLMOD 1/rcond" : "KLU condest");
+      std::string phases;
+      for (const auto& [name, seconds] : sim.times().phases()) phases += fmt::format("{}{} {:.3g} s", phases.empty() ? "" : ", ", name, seconds);
+      fmt::print("time: {}\n", phases);
       fmt::print("P-alpha curve: {}\n", output.curve_path().string());
     }
     return exit_code;

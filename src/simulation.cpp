@@ -183,9 +183,14 @@ Simulation::Simulation(LoadCase load_case, std::optional<double> planned_contact
       throw InputError(load_case_.source, m.hardening == HardeningLaw::linear ? "material.kappa" : "material.n",
                        *violation);
   }
-  const RunPlan run_plan = plan_run(load_case_, planned_contact_half_width);
+  RunPlan run_plan;
+  {
+    const PhaseTimes::Scope timing = times_.measure("planning");
+    run_plan = plan_run(load_case_, planned_contact_half_width);
+  }
   plan_ = run_plan.mesh;
   const std::optional<PlasticExtent>& pilot_plastic_zone = run_plan.plastic_zone;
+  const PhaseTimes::Scope timing = times_.measure("model");
   mesh_ = std::make_unique<Mesh>(Mesh::from_plan(load_case_, plan_));
   mesh_->set_element_kind(choose_element(load_case_));
   pattern_ = std::make_unique<StiffnessPattern>(*mesh_);
@@ -226,9 +231,13 @@ void Simulation::run(const std::function<void(const IncrementRecord&)>& on_incre
   }
 }
 
+// One increment, as a script: a trial depth, the Newton solve with its globalisation ladder,
+// then either the commit of a converged trial (after checking the condensation's assumptions),
+// or a cutback.
 IncrementRecord Simulation::advance_to(double target) {
+  const PhaseTimes::Scope timing = times_.measure("stepping");
   const auto start = std::chrono::steady_clock::now();
-  long iterations = 0, factorizations = 0;
+  SolveCounters counters;
   int cutbacks = 0;
   double step = target - alpha_;
   // The state of the last reported increment, saved before a converged sub-step (after a
@@ -244,24 +253,7 @@ IncrementRecord Simulation::advance_to(double target) {
     stop_if_requested();
     double trial = alpha_ + step;
     if (std::abs(target - trial) <= 1e-12 * std::abs(target)) trial = target;
-    // Full semi-smooth Newton steps first, for a quarter of the iteration budget (a converging
-    // increment needs far fewer; one that wanders is better handed on); then the same increment
-    // with KINSOL's line search and the whole budget; only then a cutback.
-    // Laws that follow the global load history (Ilyushin's unloading rule) need to know whether
-    // this trial goes beyond the deepest point so far.
-    if (plastic_) plastic_->set_loading(trial >= deepest_);
-    bool converged = false;
-    const int plain_budget = std::max(8, load_case_.solver.max_newton / 4);
-    for (Globalization g : {Globalization::none, Globalization::line_search}) {
-      predict(trial, iterations, factorizations);
-      last_report_ = newton_->solve(trial, system_guess_, g, g == Globalization::none ? plain_budget : 0);
-      iterations += last_report_.iterations;
-      factorizations += last_report_.factorizations;
-      if ((converged = last_report_.converged)) break;
-      stop_if_requested();
-    }
-    const NewtonReport& report = last_report_;
-    if (converged) {
+    if (solve_at(trial, counters, stop_if_requested)) {
       if (trial != target && !reported) reported = state();
       from_system(system_guess_, guess_);
       if (grow_near_field(guess_, trial)) {
@@ -269,31 +261,58 @@ IncrementRecord Simulation::advance_to(double target) {
         build_system();
         continue;  // the same trial depth on the larger near field
       }
-      u_previous_.swap(u_);
-      u_.swap(guess_);
-      alpha_previous_ = alpha_;
-      alpha_ = trial;
-      has_previous_ = true;
-      deepest_ = std::max(deepest_, alpha_);
-      largest_condition_ = std::max(largest_condition_, report.condition_estimate);
-      bulk_->commit(u_.data());  // history moves with every converged (sub-)step
+      commit(trial);
       if (trial == target) break;
       // Grow the sub-step back after an easy one.
-      if (report.iterations <= 3) step *= 2.0;
+      if (last_report_.iterations <= 3) step *= 2.0;
       step = std::copysign(std::min(std::abs(step), std::abs(target - alpha_)), target - alpha_);
       continue;
     }
-    if (cutbacks >= load_case_.solver.max_cutbacks)
+    if (cutbacks >= load_case_.solver.max_cutbacks) {
+      const NewtonReport& report = last_report_;
       throw SolverError(fmt::format(
           "the increment from alpha = {:.6g} m to {:.6g} m did not converge after {} cutbacks (last try: "
           "alpha = {:.6g} m, {} Newton iterations, scaled residual {:.3g}, KINSOL flag {}{}{})",
           alpha_, target, cutbacks, trial, report.iterations, report.residual, report.kinsol_flag,
           report.message.empty() ? "" : ": ", report.message));
+    }
     step *= 0.5;
     ++cutbacks;
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  return record(seconds, iterations, factorizations, cutbacks);
+  return record(seconds, counters.iterations, counters.factorizations, cutbacks);
+}
+
+// Full semi-smooth Newton steps first, for a quarter of the iteration budget (a converging
+// increment needs far fewer; one that wanders is better handed on); then the same trial with
+// KINSOL's line search and the whole budget.  The solution is left in system_guess_.
+bool Simulation::solve_at(double trial, SolveCounters& counters, const std::function<void()>& stop_if_requested) {
+  // Laws that follow the global load history (Ilyushin's unloading rule) need to know whether
+  // this trial goes beyond the deepest point so far.
+  if (plastic_) plastic_->set_loading(trial >= deepest_);
+  const int plain_budget = std::max(8, load_case_.solver.max_newton / 4);
+  for (Globalization g : {Globalization::none, Globalization::line_search}) {
+    predict(trial, counters.iterations, counters.factorizations);
+    last_report_ = newton_->solve(trial, system_guess_, g, g == Globalization::none ? plain_budget : 0);
+    counters.iterations += last_report_.iterations;
+    counters.factorizations += last_report_.factorizations;
+    if (last_report_.converged) return true;
+    stop_if_requested();
+  }
+  return false;
+}
+
+// A converged trial becomes the state: the displacement (guess_, already mapped from the Newton
+// system), the depth, and the material history, which moves with every converged (sub-)step.
+void Simulation::commit(double trial) {
+  u_previous_.swap(u_);
+  u_.swap(guess_);
+  alpha_previous_ = alpha_;
+  alpha_ = trial;
+  has_previous_ = true;
+  deepest_ = std::max(deepest_, alpha_);
+  largest_condition_ = std::max(largest_condition_, last_report_.condition_estimate);
+  bulk_->commit(u_.data());
 }
 
 void Simulation::predict(double trial, long& iterations, long& factorizations) {

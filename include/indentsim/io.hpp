@@ -10,6 +10,7 @@
 #include "indentsim/fields.hpp"
 #include "indentsim/file_system.hpp"
 #include "indentsim/load_stepping.hpp"
+#include "indentsim/phase_times.hpp"
 
 namespace indentsim {
 
@@ -54,7 +55,8 @@ public:
   /// Feed every converged increment in order, with Simulation::free_surface_depth() at it.
   void add(const IncrementRecord& record, double free_surface_depth);
   /// `run_fields`: JSON members (each line ending with a comma) about the run itself.
-  std::string json(const std::string& run_fields, RunStatus status, const std::string& message) const;
+  std::string json(const std::string& run_fields, RunStatus status, const std::string& message,
+                   const PhaseTimes& times = PhaseTimes{}) const;
   const std::vector<Unloading>& unloadings() const { return unloadings_; }
   double peak_depth() const { return peak_depth_; }
   double peak_force() const { return peak_force_; }
@@ -83,7 +85,8 @@ public:
   void increment(const Simulation& sim, const IncrementRecord& record);
   /// Writes the final state's fields, the layer view and summary.json with `status` (not
   /// "failed": use fail()).
-  void finish(const Simulation& sim, RunStatus status, const std::string& message = "");
+  void finish(const Simulation& sim, RunStatus status, const std::string& message = "",
+              const PhaseTimes& times = PhaseTimes{});
   /// Marks the folder as a failed run (summary.json "failed" with `message`), as far as the file
   /// system still allows; never throws.
   void fail(const std::string& message) noexcept;

@@ -16,6 +16,7 @@
 #include "indentsim/load_case.hpp"
 #include "indentsim/load_stepping.hpp"
 #include "indentsim/mesh.hpp"
+#include "indentsim/phase_times.hpp"
 #include "indentsim/plasticity.hpp"
 #include "indentsim/solver.hpp"
 
@@ -107,8 +108,20 @@ public:
   /// Times the near field had to grow (a far element would have yielded, or a far surface node
   /// would have penetrated the punch) and an increment was repeated.
   int near_field_growths() const { return near_field_growths_; }
+  /// Wall-clock time of this simulation's phases: planning (with the pilot run), model (mesh,
+  /// assembly, laws, contact, condensation, KINSOL set-up), stepping (the increments, including a
+  /// rebuild when the near field grows).  The driver adds its own (output).
+  PhaseTimes& times() { return times_; }
+  const PhaseTimes& times() const { return times_; }
 
 private:
+  struct SolveCounters {
+    long iterations = 0, factorizations = 0;
+  };
+  /// The Newton solve at depth `trial` with its globalisation ladder; true if it converged.
+  bool solve_at(double trial, SolveCounters& counters, const std::function<void()>& stop_if_requested);
+  /// Makes the converged trial (in guess_) the current state.
+  void commit(double trial);
   IncrementRecord record(double wall_seconds, long iterations, long factorizations, int cutbacks);
   /// Initial guess for depth `trial` into guess_ (counts any solve it needs).
   void predict(double trial, long& iterations, long& factorizations);
@@ -150,6 +163,7 @@ private:
   std::vector<std::string> warnings_;
   bool warned_fine_zone_ = false;
   NewtonReport last_report_;
+  PhaseTimes times_;
   LinearSolverKind linear_solver_ = LinearSolverKind::klu;
   double largest_condition_ = 0.0;
 };
