@@ -3,7 +3,7 @@
 // SUNDIALS KINSOL with the SuiteSparse KLU sparse direct solver (SUNLinSol_KLU).
 //
 // The SUNDIALS objects (context, vectors, matrix, linear solver, KINSOL memory) are owned by
-// RAII handles inside NewtonSolver (src/sundials_handles.hpp); this header does not expose them.
+// RAII handles inside NewtonSolver (src/solvers/sundials_handles.hpp); this header does not expose them.
 #include <cstdint>
 #include <memory>
 #include <string>
