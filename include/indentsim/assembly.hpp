@@ -43,6 +43,18 @@ private:
   std::vector<std::int32_t> element_position_;
 };
 
+/// Where one element sits in a Newton system (the whole mesh's free equations, or a condensed
+/// near field): its 8 unknowns in the system's numbering (-1 where a Dirichlet condition fixes
+/// one) and the positions of its 64 entries in the system's pattern (-1 likewise).  Element
+/// loops over either system go through these, so there is one loop for both.
+struct ElementSlot {
+  int ei = 0, ej = 0;
+  std::array<std::int32_t, 8> unknowns{};
+  std::array<std::int64_t, 64> positions{};
+};
+/// The slots of every element of the mesh in its free-equation system.
+std::vector<ElementSlot> whole_mesh_slots(const Mesh& mesh, const StiffnessPattern& pattern);
+
 /// Gathers an element's 8 unknowns (paper order) from the vector of free equations.
 ElementVector gather(const Mesh& mesh, int ei, int ej, const double* u);
 

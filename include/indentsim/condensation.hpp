@@ -43,14 +43,6 @@ struct PlasticExtent {
   double width = 0.0, depth = 0.0;
 };
 
-/// A near element: its 8 unknowns in the condensed numbering (-1 where a Dirichlet condition
-/// fixes one) and the positions of its 64 entries in the condensed pattern (-1 likewise).
-struct NearElement {
-  int ei = 0, ej = 0;
-  std::array<std::int32_t, 8> unknowns{};
-  std::array<std::int64_t, 64> positions{};
-};
-
 class FarFieldCondensation {
 public:
   /// Factors K_FF and forms K_red.  `contact` holds the candidates of the whole mesh; those among
@@ -70,7 +62,7 @@ public:
   const std::vector<double>& values() const { return values_; }
   /// The contact candidates in the condensed numbering, scaled by K_red's diagonal.
   const ContactBoundary& contact() const { return *contact_; }
-  const std::vector<NearElement>& elements() const { return elements_; }
+  const std::vector<ElementSlot>& elements() const { return elements_; }
   /// Free equation of each condensed unknown.
   const std::vector<int>& near_equations() const { return near_equation_; }
 
@@ -90,7 +82,7 @@ private:
   std::unique_ptr<StiffnessPattern> pattern_;
   std::vector<double> values_;
   std::unique_ptr<ContactBoundary> contact_;
-  std::vector<NearElement> elements_;
+  std::vector<ElementSlot> elements_;
   std::unique_ptr<FarFactor> far_;
 };
 

@@ -9,6 +9,7 @@
 // the result is the elastic model's.  Inelastic elements are integrated with 2x2 Gauss points:
 // stresses for the residual, consistent tangents for the Jacobian.
 #include <memory>
+#include <unordered_map>
 #include <vector>
 
 #include "indentsim/assembly.hpp"
@@ -109,26 +110,41 @@ public:
 
   const PointLaw& law() const { return *law_; }
   const ElasticStiffness& elastic() const { return elastic_; }
-  void set_loading(bool beyond_previous_peak) { law_->set_loading(beyond_previous_peak); }
+  void set_loading(bool beyond_previous_peak) {
+    kept_.clear();  // the branch of the law may change
+    law_->set_loading(beyond_previous_peak);
+  }
 
-  /// The departure of element (ei, ej) from linear elasticity at its unknowns ue (paper order):
-  /// the internal force f_e - K_e ue, or the tangent d f_e / d ue - K_e.  False, with nothing
-  /// written, where all four Gauss points respond elastically (as the whole far field does).
-  bool force_correction(int ei, int ej, const ElementVector& ue, ElementVector& correction) const;
-  bool tangent_correction(int ei, int ej, const ElementVector& ue, ElementMatrix& correction) const;
+  /// The one element loop of inelastic assembly, for any Newton system (the whole mesh, or a
+  /// condensed near field, given by its element slots): adds to f (or to the tangent's values)
+  /// each element's departure from linear elasticity at u, f_e - K_e u_e (or d f_e / d u_e - K_e).
+  /// Elements whose four Gauss points respond elastically (the whole far field) add nothing.
+  /// The Gauss-point responses of the force pass are kept, so that the tangent at the same u (the
+  /// Jacobian KINSOL asks for after a residual) does not run the return map again.
+  void add_force_corrections(const std::vector<ElementSlot>& slots, const double* u, double* f) const;
+  void add_tangent_corrections(const std::vector<ElementSlot>& slots, const double* u, double* values) const;
   /// True if a Gauss point of element (ei, ej) is inelastic at u (free-equation vector).
   bool inelastic_at(int ei, int ej, const double* u) const;
 
 private:
+  /// The four Gauss-point tangents of an inelastic element at its unknowns ue, from the force pass.
+  struct KeptResponse {
+    ElementVector ue;
+    std::array<PlaneStrainMatrix, 4> tangents;
+  };
   /// True if any Gauss point of the element is inelastic at u (strains returned).
   bool inelastic(int ei, int ej, const double* u, std::array<VoigtVector, 4>& strains) const;
   bool inelastic(int ei, int ej, const ElementVector& ue, std::array<VoigtVector, 4>& strains) const;
-  ElementVector element_force(int ei, int ej, const std::array<VoigtVector, 4>& strains) const;
+  /// The element's internal force from its Gauss-point strains; the points' tangents too, if asked.
+  ElementVector element_force(int ei, int ej, const std::array<VoigtVector, 4>& strains,
+                              std::array<PlaneStrainMatrix, 4>* tangents = nullptr) const;
 
   const ElasticStiffness& elastic_;
   const Mesh& mesh_;
   const StiffnessPattern& pattern_;
   std::unique_ptr<PointLaw> law_;
+  std::vector<ElementSlot> slots_;  ///< the whole mesh's, for internal_force and tangent
+  mutable std::unordered_map<int, KeptResponse> kept_;  ///< by element, from the last force pass
   std::vector<double> committed_u_;
   long plastic_points_ = 0;
   double max_strain_intensity_ = 0.0;

@@ -120,6 +120,7 @@ InelasticBulk::InelasticBulk(const ElasticStiffness& elastic, std::unique_ptr<Po
       mesh_(elastic.mesh()),
       pattern_(elastic.pattern()),
       law_(std::move(law)),
+      slots_(whole_mesh_slots(elastic.mesh(), elastic.pattern())),
       committed_u_(static_cast<std::size_t>(elastic.mesh().equations()), 0.0) {}
 
 bool InelasticBulk::inelastic(int ei, int ej, const double* u, std::array<VoigtVector, 4>& strains) const {
@@ -139,64 +140,73 @@ bool InelasticBulk::inelastic_at(int ei, int ej, const double* u) const {
   return inelastic(ei, ej, u, strains);
 }
 
-ElementVector InelasticBulk::element_force(int ei, int ej, const std::array<VoigtVector, 4>& strains) const {
+ElementVector InelasticBulk::element_force(int ei, int ej, const std::array<VoigtVector, 4>& strains,
+                                           std::array<PlaneStrainMatrix, 4>* tangents) const {
   const Rectangle rect = mesh_.rectangle(ei, ej);
   const std::size_t first = 4 * static_cast<std::size_t>(mesh_.element(ei, ej));
   const auto& points = gauss_points_2x2();
   ElementVector fe = ElementVector::Zero();
   for (std::size_t g = 0; g < points.size(); ++g) {
+    const PointResponse r = law_->respond(first + g, strains[g]);
     const StrainDisplacement b = strain_displacement(rect, points[g].xi, points[g].eta, mesh_.element_kind());
-    fe.noalias() += (points[g].weight * rect.width * rect.height) * b.transpose() * law_->respond(first + g, strains[g]).stress;
+    fe.noalias() += (points[g].weight * rect.width * rect.height) * b.transpose() * r.stress;
+    if (tangents) (*tangents)[g] = r.tangent;
   }
   return fe;
 }
 
-bool InelasticBulk::force_correction(int ei, int ej, const ElementVector& ue, ElementVector& correction) const {
+void InelasticBulk::add_force_corrections(const std::vector<ElementSlot>& slots, const double* u, double* f) const {
+  kept_.clear();
+  ElementVector ue;
   std::array<VoigtVector, 4> strains;
-  if (!inelastic(ei, ej, ue, strains)) return false;
-  correction = element_force(ei, ej, strains) - elastic_.cached_matrix(ei, ej) * ue;
-  return true;
+  for (const ElementSlot& slot : slots) {
+    for (int a = 0; a < 8; ++a) ue[a] = slot.unknowns[a] < 0 ? 0.0 : u[slot.unknowns[a]];
+    if (!inelastic(slot.ei, slot.ej, ue, strains)) continue;
+    KeptResponse& kept = kept_[mesh_.element(slot.ei, slot.ej)];
+    kept.ue = ue;
+    const ElementVector correction =
+        element_force(slot.ei, slot.ej, strains, &kept.tangents) - elastic_.cached_matrix(slot.ei, slot.ej) * ue;
+    for (int a = 0; a < 8; ++a)
+      if (slot.unknowns[a] >= 0) f[slot.unknowns[a]] += correction[a];
+  }
 }
 
-bool InelasticBulk::tangent_correction(int ei, int ej, const ElementVector& ue, ElementMatrix& correction) const {
+void InelasticBulk::add_tangent_corrections(const std::vector<ElementSlot>& slots, const double* u,
+                                            double* values) const {
+  ElementVector ue;
   std::array<VoigtVector, 4> strains;
-  if (!inelastic(ei, ej, ue, strains)) return false;
-  const std::size_t first = 4 * static_cast<std::size_t>(mesh_.element(ei, ej));
   std::array<PlaneStrainMatrix, 4> d;
-  for (std::size_t g = 0; g < 4; ++g) d[g] = law_->respond(first + g, strains[g]).tangent;
-  correction = gauss_stiffness(mesh_.rectangle(ei, ej), d, mesh_.element_kind()) - elastic_.cached_matrix(ei, ej);
-  return true;
+  for (const ElementSlot& slot : slots) {
+    for (int a = 0; a < 8; ++a) ue[a] = slot.unknowns[a] < 0 ? 0.0 : u[slot.unknowns[a]];
+    const int element = mesh_.element(slot.ei, slot.ej);
+    const auto kept = kept_.find(element);
+    if (kept != kept_.end() && kept->second.ue == ue) {
+      d = kept->second.tangents;  // the force pass at this u ran the return map already
+    } else {
+      if (!inelastic(slot.ei, slot.ej, ue, strains)) continue;
+      const std::size_t first = 4 * static_cast<std::size_t>(element);
+      for (std::size_t g = 0; g < 4; ++g) d[g] = law_->respond(first + g, strains[g]).tangent;
+    }
+    const ElementMatrix correction =
+        gauss_stiffness(mesh_.rectangle(slot.ei, slot.ej), d, mesh_.element_kind()) - elastic_.cached_matrix(slot.ei, slot.ej);
+    for (int p = 0; p < 64; ++p)
+      if (slot.positions[p] >= 0) values[slot.positions[p]] += correction(p / 8, p % 8);
+  }
 }
 
 void InelasticBulk::internal_force(const double* u, double* f) {
   elastic_.multiply(u, f);
-  ElementVector correction;
-  for (int ei = 0; ei < mesh_.elements_x(); ++ei)
-    for (int ej = 0; ej < mesh_.elements_y(); ++ej) {
-      if (!force_correction(ei, ej, gather(mesh_, ei, ej, u), correction)) continue;
-      const auto dofs = mesh_.element_dofs(ei, ej);
-      for (int a = 0; a < 8; ++a) {
-        const int eq = mesh_.equation(dofs[a]);
-        if (eq >= 0) f[eq] += correction[a];
-      }
-    }
+  add_force_corrections(slots_, u, f);
 }
 
 void InelasticBulk::tangent(const double* u, double* values) {
   const auto& k = elastic_.values();
   std::copy(k.begin(), k.end(), values);
-  ElementMatrix correction;
-  for (int ei = 0; ei < mesh_.elements_x(); ++ei)
-    for (int ej = 0; ej < mesh_.elements_y(); ++ej) {
-      if (!tangent_correction(ei, ej, gather(mesh_, ei, ej, u), correction)) continue;
-      const std::int32_t* pos = pattern_.element_positions(mesh_.element(ei, ej));
-      for (int a = 0; a < 8; ++a)
-        for (int b = 0; b < 8; ++b)
-          if (pos[8 * a + b] >= 0) values[pos[8 * a + b]] += correction(a, b);
-    }
+  add_tangent_corrections(slots_, u, values);
 }
 
 void InelasticBulk::commit(const double* u) {
+  kept_.clear();  // the history moves: responses at the old history are stale
   std::copy(u, u + committed_u_.size(), committed_u_.begin());
   plastic_points_ = 0;
   max_strain_intensity_ = 0.0;
@@ -221,6 +231,7 @@ std::vector<double> InelasticBulk::history() const {
 
 void InelasticBulk::restore(const std::vector<double>& h, const double* u) {
   if (h.size() < 2) throw std::invalid_argument("inelastic history too short");
+  kept_.clear();
   plastic_points_ = static_cast<long>(h[0]);
   max_strain_intensity_ = h[1];
   law_->restore(std::vector<double>(h.begin() + 2, h.end()));

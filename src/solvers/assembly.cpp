@@ -183,4 +183,21 @@ std::array<VoigtVector, 4> gauss_point_strains(const Mesh& mesh, int ei, int ej,
   return strains;
 }
 
+std::vector<ElementSlot> whole_mesh_slots(const Mesh& mesh, const StiffnessPattern& pattern) {
+  std::vector<ElementSlot> slots;
+  slots.reserve(static_cast<std::size_t>(mesh.elements()));
+  for (int ei = 0; ei < mesh.elements_x(); ++ei)
+    for (int ej = 0; ej < mesh.elements_y(); ++ej) {
+      ElementSlot slot;
+      slot.ei = ei;
+      slot.ej = ej;
+      const auto dofs = mesh.element_dofs(ei, ej);
+      for (int a = 0; a < 8; ++a) slot.unknowns[a] = mesh.equation(dofs[a]);
+      const std::int32_t* pos = pattern.element_positions(mesh.element(ei, ej));
+      for (int p = 0; p < 64; ++p) slot.positions[p] = pos[p];
+      slots.push_back(slot);
+    }
+  return slots;
+}
+
 }  // namespace indentsim

@@ -198,7 +198,7 @@ FarFieldCondensation::FarFieldCondensation(const ElasticStiffness& stiffness, co
 
   for (int ei = 0; ei < columns; ++ei)
     for (int ej = top - rows + 1; ej <= top; ++ej) {
-      NearElement ne;
+      ElementSlot ne;
       ne.ei = ei;
       ne.ej = ej;
       const auto dofs = mesh.element_dofs(ei, ej);
@@ -240,28 +240,13 @@ void FarFieldCondensation::expand(const std::vector<double>& u_near, std::vector
 
 void CondensedBulk::internal_force(const double* u, double* f) {
   condensation_.pattern().multiply(condensation_.values(), u, f);
-  if (!inelastic_) return;
-  ElementVector ue, correction;
-  for (const NearElement& ne : condensation_.elements()) {
-    for (int a = 0; a < 8; ++a) ue[a] = ne.unknowns[a] < 0 ? 0.0 : u[ne.unknowns[a]];
-    if (!inelastic_->force_correction(ne.ei, ne.ej, ue, correction)) continue;
-    for (int a = 0; a < 8; ++a)
-      if (ne.unknowns[a] >= 0) f[ne.unknowns[a]] += correction[a];
-  }
+  if (inelastic_) inelastic_->add_force_corrections(condensation_.elements(), u, f);
 }
 
 void CondensedBulk::tangent(const double* u, double* values) {
   const auto& k = condensation_.values();
   std::copy(k.begin(), k.end(), values);
-  if (!inelastic_) return;
-  ElementVector ue;
-  ElementMatrix correction;
-  for (const NearElement& ne : condensation_.elements()) {
-    for (int a = 0; a < 8; ++a) ue[a] = ne.unknowns[a] < 0 ? 0.0 : u[ne.unknowns[a]];
-    if (!inelastic_->tangent_correction(ne.ei, ne.ej, ue, correction)) continue;
-    for (int p = 0; p < 64; ++p)
-      if (ne.positions[p] >= 0) values[ne.positions[p]] += correction(p / 8, p % 8);
-  }
+  if (inelastic_) inelastic_->add_tangent_corrections(condensation_.elements(), u, values);
 }
 
 }  // namespace indentsim
