@@ -1,5 +1,5 @@
 #pragma once
-// Frictionless Signorini contact with the rigid cylindrical punch (MODEL.md, "Punch and contact").
+// Frictionless Signorini contact with the rigid cylindrical punch (docs/MODEL.md §3).
 //
 // The punch surface is y = -alpha + g(x), g(x) = R - sqrt(R^2 - x^2).  At a candidate node k of
 // the top surface (x_k < R) with vertical displacement v_k and vertical internal force r_k

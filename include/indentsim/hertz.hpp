@@ -1,5 +1,5 @@
 #pragma once
-// Hertz line contact of a rigid cylinder on an elastic half-plane (MODEL.md, "Reference
+// Hertz line contact of a rigid cylinder on an elastic half-plane (docs/MODEL.md §8, "Reference
 // results"), and the estimate of the final contact half-width used to size the mesh.
 
 namespace indentsim::hertz {

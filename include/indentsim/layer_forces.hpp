@@ -1,5 +1,5 @@
 #pragma once
-// The paper's finite-difference view of equilibrium (MODEL.md, "Finite-difference view";
+// The paper's finite-difference view of equilibrium (docs/MODEL.md §7;
 // Yazici 2023, section "Obtaining the Finite Difference Equation at Any Point").
 //
 // At node (i, j), multiplying rows of the current (secant) local stiffness matrices by the

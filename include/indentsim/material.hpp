@@ -1,5 +1,5 @@
 #pragma once
-// Material laws (MODEL.md, "Material").
+// Material laws (docs/MODEL.md §4-5).
 //
 // Linear elasticity in plane strain, and Ilyushin's small elasto-plastic deformations: a secant
 // law sigma = lambda~ tr(eps) I + 2 mu~ eps with lambda~ = lambda + (2/3) mu omega(e_u),
@@ -38,7 +38,7 @@ struct ElasticMaterial {
 /// D for given Lamé constants: sigma = lambda tr(eps) I + 2 mu eps, eps33 = 0.
 PlaneStrainMatrix plane_strain_stiffness(const LameConstants& lame);
 
-/// e_u = (sqrt 2 / 3) sqrt((e11-e22)^2 + e22^2 + e11^2 + 6 e12^2) with eps33 = 0 (MODEL.md);
+/// e_u = (sqrt 2 / 3) sqrt((e11-e22)^2 + e22^2 + e11^2 + 6 e12^2) with eps33 = 0 (docs/MODEL.md §4);
 /// equal to sqrt(2/3 e:e) with e the deviatoric strain.
 double strain_intensity(const VoigtVector& strain);
 

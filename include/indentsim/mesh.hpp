@@ -32,7 +32,7 @@ struct MeshPlan {
 };
 
 /// Growth ratio used when the load case does not set one: tightens as contact_nodes grows, so
-/// that refining the contact zone refines the far field in proportion (MODEL.md: P depends on
+/// that refining the contact zone refines the far field in proportion (docs/MODEL.md §6: P depends on
 /// the stiffness of the whole block).  Element size at distance d from the fine zone is about
 /// (growth - 1) d, so growth - 1 ~ 1/contact_nodes halves every element when contact_nodes doubles.
 double default_growth(int contact_nodes);

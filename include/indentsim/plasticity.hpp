@@ -1,5 +1,5 @@
 #pragma once
-// Inelastic bulk models on the mesh: Ilyushin's deformation theory (MODEL.md, "Material"), with
+// Inelastic bulk models on the mesh: Ilyushin's deformation theory (docs/MODEL.md §4-5), with
 // Ilyushin's unloading rule when the load path unloads, and incremental J2 flow theory.
 //
 // Only what the scene needs: the elastic stiffness K (cached closed-form element matrices) is

@@ -64,7 +64,7 @@ SecantResponse IlyushinLaw::respond(const VoigtVector& strain) const {
   r.stress33 = secant.lambda * (strain[0] + strain[1]);
 
   // Consistent tangent C = K I(x)I + 2 mu (1-omega) I_dev - (4 mu / 3)(omega'/e_u) e(x)e, restricted
-  // to (11, 22, 12) with the engineering shear column (MODEL.md).  Below the limit omega' = 0
+  // to (11, 22, 12) with the engineering shear column (docs/MODEL.md §4).  Below the limit omega' = 0
   // and C = D_elastic.
   r.tangent = r.secant;
   if (r.plastic) {

@@ -139,7 +139,7 @@ std::vector<std::string> plausibility_warnings(const LoadCase& lc, const MeshPla
     warnings.push_back(fmt::format("material.E = {:g} Pa is outside the moduli of solids ({:g} Pa to {:g} Pa): "
                                    "pascals are meant (210 GPa is 210e9)",
                                    lc.material.E, min_plausible_modulus, max_plausible_modulus));
-  // The model is small-strain with the gap measured vertically (docs/MODEL.md): both need slopes
+  // The model is small-strain with the gap measured vertically (docs/MODEL.md §3): both need slopes
   // and depths small against the punch radius.
   const double relative_depth = lc.max_depth() / lc.punch.radius;
   if (relative_depth > max_relative_depth)

@@ -44,7 +44,7 @@ ContactResult evaluate_contact(const ContactBoundary& boundary, const double* u,
     const double fk = internal_force[cs[k].equation];
     const bool on = ContactBoundary::active(cs[k], fk, u[cs[k].equation], alpha);
     r.in_contact[k] = on;
-    // MODEL.md: P is twice the sum of the vertical reactions of all contact nodes of the half
+    // docs/MODEL.md §3: P is twice the sum of the vertical reactions of all contact nodes of the half
     // model, the axis node included.  Open nodes carry no force (their residual is the
     // equilibrium residual itself), so summing -r_k over contact nodes is the reaction.
     if (on) {
