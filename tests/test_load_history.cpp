@@ -104,7 +104,8 @@ TEST_P(PlasticHistory, UnloadingToSeparationAndBackIntoContact) {
   EXPECT_GE(h.most_tensile_contact_force, -1e-9 * h.summary.peak_force());
 }
 
-INSTANTIATE_TEST_SUITE_P(Models, PlasticHistory, ::testing::Values("ilyushin", "j2"));
+INSTANTIATE_TEST_SUITE_P(Models, PlasticHistory, ::testing::Values("ilyushin", "j2"),
+                         [](const ::testing::TestParamInfo<std::string>& info) { return info.param; });
 
 TEST(LoadHistory, J2AndIlyushinAgreeBeforeTheyDiverge) {
   // On indentation the strain path under the punch is not proportional, so the two models

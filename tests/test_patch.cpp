@@ -94,4 +94,7 @@ TEST_P(PatchTest, UniformCompressionIsReproducedExactlyOnAGradedMesh) {
   EXPECT_LE(worst, 1e-12 * eps * ly);
 }
 
-INSTANTIATE_TEST_SUITE_P(Elements, PatchTest, ::testing::Values(ElementKind::q1, ElementKind::bbar));
+INSTANTIATE_TEST_SUITE_P(Elements, PatchTest, ::testing::Values(ElementKind::q1, ElementKind::bbar),
+                         [](const ::testing::TestParamInfo<ElementKind>& info) {
+                           return std::string(info.param == ElementKind::q1 ? "q1" : "bbar");
+                         });
