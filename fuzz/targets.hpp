@@ -7,6 +7,22 @@
 #include <cstdint>
 
 namespace indentsim::fuzz {
-int load_case(const std::uint8_t* data, std::size_t size);
-int checkpoint(const std::uint8_t* data, std::size_t size);
+
+/// What a reader made of an input: a result, or a clean InputError.
+enum class Outcome { accepted, rejected };
+
+/// The targets: parse (and, for an intact checkpoint of a small mesh, resume) the input.
+Outcome load_case_outcome(const std::uint8_t* data, std::size_t size);
+Outcome checkpoint_outcome(const std::uint8_t* data, std::size_t size);
+
+/// The same as libFuzzer entry points (always 0: only crashes and sanitizer reports count).
+inline int load_case(const std::uint8_t* data, std::size_t size) {
+  (void)load_case_outcome(data, size);
+  return 0;
+}
+inline int checkpoint(const std::uint8_t* data, std::size_t size) {
+  (void)checkpoint_outcome(data, size);
+  return 0;
+}
+
 }  // namespace indentsim::fuzz
