@@ -54,18 +54,42 @@ TEST(FiniteDifferenceView, LayerEquationsVanishAtInteriorNodesPlastic) {
 }
 
 TEST(FiniteDifferenceView, TopLayerForceIsTheContactReaction) {
-  Simulation sim(shipped_case("deep_plastic.toml", {"load.increments=3", "mesh.contact_nodes=8"}));
-  sim.run();
-  const auto layer = nodal_layer_forces(sim.mesh(), sim.bulk());
-  const ContactResult c = sim.contact();
-  const auto& cs = sim.contact_boundary().candidates();
-  for (std::size_t k = 0; k < cs.size(); ++k) {
-    // sigma_N^- at a top node is minus the punch's force on it.
-    EXPECT_NEAR(-layer[cs[k].node].normal_below, c.nodal_force[k], 1e-9 * c.force) << "node " << k;
-    // Frictionless: no tangential force on the surface (the axis node carries the symmetry reaction).
-    if (k > 0) {
-      EXPECT_NEAR(layer[cs[k].node].tangential_below, 0.0, 1e-9 * c.force) << "node " << k;
+  // The layer view's force on each surface node (rows of the elements below it), checked against
+  // the contact conditions themselves rather than against the contact solver's own account: where
+  // it presses, the node lies on the punch (u2 = -alpha + g(x)); where the node is off the punch,
+  // it vanishes; it never pulls; there is no tangential surface force (frictionless); and twice
+  // its sum is the force P of the increment.  A layer view built from the wrong rows or elements,
+  // or a contact solution off the punch, fails here.
+  for (const char* name : {"deep_plastic.toml", "elastic.toml"}) {
+    SCOPED_TRACE(name);
+    Simulation sim(shipped_case(name, {"load.increments=3", "mesh.contact_nodes=8"}));
+    IncrementRecord last;
+    sim.run([&](const IncrementRecord& r) { last = r; });
+    const auto layer = nodal_layer_forces(sim.mesh(), sim.bulk());
+    const auto& u = sim.displacement();
+    const double alpha = sim.alpha(), P = last.force;
+    ASSERT_GT(P, 0.0);
+    double total = 0.0;
+    int pressing = 0;
+    for (const auto& c : sim.contact_boundary().candidates()) {
+      const double force = -layer[c.node].normal_below;  // the punch's push on the node
+      // How far the node is below the punch surface y = -alpha + g(x): >= 0, 0 in contact.
+      const double separation = -alpha + c.surface_height - u[c.equation];
+      EXPECT_GE(force, -1e-9 * P) << "tensile contact at node " << c.node;
+      EXPECT_GE(separation, -1e-9 * alpha) << "penetration at node " << c.node;
+      if (force > 1e-9 * P) {
+        EXPECT_NEAR(separation, 0.0, 1e-9 * alpha) << "a pressed node off the punch: " << c.node;
+        ++pressing;
+      } else if (separation > 1e-6 * alpha) {
+        EXPECT_NEAR(force, 0.0, 1e-9 * P) << "a node off the punch carries force: " << c.node;
+      }
+      if (c.node != sim.mesh().node(0, sim.mesh().top_row())) {
+        EXPECT_NEAR(layer[c.node].tangential_below, 0.0, 1e-9 * P) << "friction at node " << c.node;
+      }
+      total += force;
     }
+    EXPECT_GE(pressing, 2);
+    EXPECT_NEAR(2.0 * total, P, 1e-9 * P);
   }
 }
 
