@@ -42,8 +42,9 @@ TEST(Element, StiffnessIsSymmetricWithRigidBodyModesInItsKernel) {
 }
 
 TEST(Element, PaperTypoInA22IsNotReproduced) {
-  // The paper prints A22(4,4) = mu tau/(6h) - (lambda+2mu) h/(3 tau); symmetry of the bilinear
-  // form requires mu tau/(3h) + (lambda+2mu) h/(3 tau), like the other diagonal entries.
+  // The paper prints A22(4,4) = mu tau/(6h) - (lambda+2mu) h/(3 tau); the rectangle's symmetry
+  // (its four vertices are equivalent) requires mu tau/(3h) + (lambda+2mu) h/(3 tau), like the
+  // other diagonal entries of the block.
   const Rectangle rect{1.0, 2.0};
   const LameConstants lame{3.0, 1.0};
   const ElementMatrix k = closed_form_stiffness(rect, lame);

@@ -76,11 +76,12 @@ ContactResult evaluate_contact(const ContactBoundary& boundary, const double* u,
 /// node x_n and the first open node x_{n+1}; the nodal pressures p_k = lambda_k / w_k (w_k the
 /// tributary width) next to it locate it.  Near the edge of a smooth punch the pressure has the
 /// square-root form p^2 ~ C (a^2 - x^2) (exact for Hertz, first-order for any smooth edge), so a
-/// least-squares line p^2 = A + B x^2 through the contact nodes n-3 .. n-1 gives a^2 = -A/B.
+/// least-squares line p^2 = A + B x^2 through the contact nodes n-5 .. n-1 gives a^2 = -A/B
+/// (pressures taken relative to the largest of them, so the fit does not depend on units).
 /// Node n itself is left out: its tributary strip is partly open.  The estimate is confined to
 /// [x_{n-1}, x_{n+1}] (an outermost node may carry a sliver of force with the continuous edge
 /// just inside it); with too few contact nodes it falls back to the middle of [x_n, x_{n+1}].
-/// Consistent: the fitted nodes are within 4 elements of the edge, so it converges as h -> 0.
+/// Consistent: the fitted nodes are within 6 elements of the edge, so it converges as h -> 0.
 double contact_half_width(const ContactBoundary& boundary, const ContactResult& contact);
 
 }  // namespace indentsim

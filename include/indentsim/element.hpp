@@ -35,8 +35,9 @@ constexpr int u_index(int vertex) { return vertex - 1; }
 constexpr int v_index(int vertex) { return vertex + 3; }
 
 /// The paper's closed-form local stiffness matrix (A11, A12 = A21^T, A22), with the
-/// printed typos corrected: the last row of A22 (and the missing diagonal entry of
-/// A11's last row) follow from the symmetry of the bilinear form.
+/// printed misprints corrected: the last row of A22 and the missing diagonal entry of A11's last
+/// row follow from the rectangle's symmetry (the four vertices are equivalent, so every diagonal
+/// entry of a block is the same), docs/MODEL.md §6.2.
 ElementMatrix closed_form_stiffness(const Rectangle& rect, const LameConstants& lame);
 
 /// 2x2 Gauss points of the reference square, as (xi, eta) in [0,1]^2.
