@@ -24,13 +24,7 @@ namespace {
 
 using indentsim::testing::slurp;
 
-// curve.csv without its wall-clock column (the last one).
-std::string curve_without_timing(const fs::path& file) {
-  std::istringstream in(slurp(file));
-  std::string line, out;
-  while (std::getline(in, line)) out += line.substr(0, line.rfind(',')) + "\n";
-  return out;
-}
+using indentsim::testing::curve_without_timing;
 
 // A small run's checkpoint, built through the library.
 // summary.json without its wall-clock line ("time_s").

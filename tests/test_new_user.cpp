@@ -22,13 +22,7 @@ namespace {
 
 class NewUser : public indentsim::testing::CliTest {};
 
-// curve.csv without its wall-clock column (the last one).
-std::string curve_without_timing(const fs::path& file) {
-  std::istringstream in(slurp(file));
-  std::string line, out;
-  while (std::getline(in, line)) out += line.substr(0, line.rfind(',')) + "\n";
-  return out;
-}
+using indentsim::testing::curve_without_timing;
 
 std::string fmt_e0(double e0) {
   std::ostringstream s;

@@ -32,6 +32,16 @@ private:
   std::vector<double> load_;
 };
 
+// A lx x ly block graded towards the loaded corner, of the given element kind.
+Mesh graded_block(double lx, double ly, ElementKind kind) {
+  const auto depth = graded_axis(ly, 1e-3, 2e-4, 1.25);
+  std::vector<double> y(depth.size());
+  for (std::size_t k = 0; k < depth.size(); ++k) y[k] = -depth[depth.size() - 1 - k];
+  Mesh mesh(graded_axis(lx, 2e-3, 2.5e-4, 1.3), y);
+  mesh.set_element_kind(kind);
+  return mesh;
+}
+
 }  // namespace
 
 class PatchTest : public ::testing::TestWithParam<ElementKind> {};
@@ -40,13 +50,7 @@ TEST_P(PatchTest, UniformCompressionIsReproducedExactlyOnAGradedMesh) {
   // u1 = 0, u2 = -eps (y + ly): satisfies the base clamp and the axis symmetry condition.
   // Stresses: sigma22 = -(lambda + 2 mu) eps on top, sigma11 = -lambda eps on the side x = lx.
   const double lx = 15e-3, ly = 10e-3, eps = 1e-3;
-  Mesh mesh(graded_axis(lx, 2e-3, 2.5e-4, 1.3), [&] {
-    auto d = graded_axis(ly, 1e-3, 2e-4, 1.25);
-    std::vector<double> y(d.size());
-    for (std::size_t k = 0; k < d.size(); ++k) y[k] = -d[d.size() - 1 - k];
-    return y;
-  }());
-  mesh.set_element_kind(GetParam());
+  Mesh mesh = graded_block(lx, ly, GetParam());
   const ElasticMaterial material{210e9, 0.3};
   const LameConstants lame = material.lame();
   const StiffnessPattern pattern(mesh);
@@ -101,13 +105,7 @@ TEST_P(PatchTest, EveryConstantStrainStateIsExactOnAGradedMesh) {
   // constant strain, and the assembled element forces vanish at every interior node (constant
   // stress is in equilibrium) and equal the consistent tractions on the boundary.
   const double lx = 15e-3, ly = 10e-3, e = 1e-3;
-  Mesh mesh(graded_axis(lx, 2e-3, 2.5e-4, 1.3), [&] {
-    auto d = graded_axis(ly, 1e-3, 2e-4, 1.25);
-    std::vector<double> y(d.size());
-    for (std::size_t k = 0; k < d.size(); ++k) y[k] = -d[d.size() - 1 - k];
-    return y;
-  }());
-  mesh.set_element_kind(GetParam());
+  Mesh mesh = graded_block(lx, ly, GetParam());
   const ElasticMaterial material{210e9, 0.3};
   const StiffnessPattern pattern(mesh);
   ElasticStiffness stiffness(mesh, material, pattern);

@@ -48,19 +48,7 @@ namespace {
 
 class UnloadingOutputs : public indentsim::testing::CliTest {};
 
-std::vector<std::vector<double>> read_curve(const fs::path& file) {
-  std::istringstream in(slurp(file));
-  std::string line;
-  std::getline(in, line);
-  std::vector<std::vector<double>> rows;
-  while (std::getline(in, line)) {
-    std::vector<double> row;
-    std::istringstream cells(line);
-    for (std::string cell; std::getline(cells, cell, ',');) row.push_back(std::stod(cell));
-    rows.push_back(row);
-  }
-  return rows;
-}
+using indentsim::testing::read_curve;
 
 double json_number(const std::string& json, const std::string& key) {
   std::smatch m;

@@ -16,6 +16,8 @@
 #include "test_support.hpp"
 
 namespace fs = std::filesystem;
+using indentsim::testing::curve_without_timing;
+using indentsim::testing::read_curve;
 using indentsim::testing::slurp;
 using indentsim::testing::source_path;
 
@@ -48,26 +50,6 @@ protected:
     for (const auto& entry : fs::directory_iterator(folder, ec)) names.push_back(entry.path().filename().string());
     std::sort(names.begin(), names.end());
     return names;
-  }
-  static std::vector<std::vector<double>> read_curve(const fs::path& file) {
-    std::istringstream in(slurp(file));
-    std::string line;
-    std::getline(in, line);
-    std::vector<std::vector<double>> rows;
-    while (std::getline(in, line)) {
-      std::vector<double> row;
-      std::istringstream cells(line);
-      for (std::string cell; std::getline(cells, cell, ',');) row.push_back(std::stod(cell));
-      rows.push_back(row);
-    }
-    return rows;
-  }
-  // curve.csv without its wall-clock column (the last one).
-  static std::string curve_without_timing(const fs::path& file) {
-    std::istringstream in(slurp(file));
-    std::string line, out;
-    while (std::getline(in, line)) out += line.substr(0, line.rfind(',')) + "\n";
-    return out;
   }
 };
 

@@ -56,6 +56,29 @@ inline std::string slurp(const std::filesystem::path& p) {
   return s.str();
 }
 
+/// curve.csv without its wall-clock column (the last one): what must agree between two runs.
+inline std::string curve_without_timing(const std::filesystem::path& file) {
+  std::istringstream in(slurp(file));
+  std::string line, out;
+  while (std::getline(in, line)) out += line.substr(0, line.rfind(',')) + "\n";
+  return out;
+}
+
+/// curve.csv's rows as numbers (header skipped), in its column order.
+inline std::vector<std::vector<double>> read_curve(const std::filesystem::path& file) {
+  std::istringstream in(slurp(file));
+  std::string line;
+  std::getline(in, line);
+  std::vector<std::vector<double>> rows;
+  while (std::getline(in, line)) {
+    std::vector<double> row;
+    std::istringstream cells(line);
+    for (std::string cell; std::getline(cells, cell, ',');) row.push_back(std::stod(cell));
+    rows.push_back(row);
+  }
+  return rows;
+}
+
 /// A temporary folder and the CLI run in it: cli() returns the exit status (128 + signal when a
 /// signal ended it), out() and err() what it printed.  `environment` is prefixed to the command
 /// (e.g. "INDENTSIM_FAULT=write:5").
