@@ -125,3 +125,21 @@ TEST_F(NewUser, UnknownCommandsAreNamedAndVersionIsPrinted) {
   EXPECT_NE(slurp(dir_ / "v" / "summary.json").find("\"indentsim\": \"indentsim "), std::string::npos);
   EXPECT_NE(slurp(dir_ / "v" / "case.toml").find("# Written by indentsim "), std::string::npos);
 }
+
+TEST_F(NewUser, UnitSlipsAreWarnedAboutNotRefused) {
+  const std::string c = source_path("loadcases/elastic.toml");
+  // E meant in GPa: runs, and says so.
+  ASSERT_EQ(cli("check " + c + " --set material.E=200"), 0) << err();
+  EXPECT_NE(err().find("warning: material.E = 200 Pa"), std::string::npos) << err();
+  ASSERT_EQ(cli("run " + c + " --quiet --set material.E=200 --set mesh.contact_nodes=4 --set load.increments=1 --out " +
+                (dir_ / "gpa").string()),
+            0)
+      << err();
+  EXPECT_NE(err().find("material.E"), std::string::npos) << err();
+  // A punch radius in metres that was meant in millimetres: the contact is half the block.
+  ASSERT_EQ(cli("check " + c + " --set punch.radius=1"), 0) << err();
+  EXPECT_NE(err().find("of geometry.lx"), std::string::npos) << err();
+  // The shipped case itself draws no warning.
+  ASSERT_EQ(cli("check " + c), 0) << err();
+  EXPECT_EQ(err().find("warning"), std::string::npos) << err();
+}
