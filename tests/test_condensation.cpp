@@ -70,7 +70,7 @@ TEST(FarFieldCondensation, SchurComplementIsExact) {
     Mesh mesh = Mesh::from_plan(lc, plan);
     const StiffnessPattern pattern(mesh);
     const ElasticStiffness k(mesh, ElasticMaterial{lc.material.E, lc.material.nu}, pattern);
-    const ContactBoundary contact(mesh, CylindricalPunch{lc.punch.radius}, pattern, k.values());
+    const ContactBoundary contact(mesh, make_punch(lc.punch), pattern, k.values());
     const NearField near{true, 8, name == std::string("paper.toml") ? 6 : 0, name == std::string("paper.toml") ? 5 : 0};
     const FarFieldCondensation condensation(k, contact, near);
     ASSERT_LT(condensation.size(), mesh.equations() / 4);

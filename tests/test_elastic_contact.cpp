@@ -42,7 +42,7 @@ HertzErrors hertz_errors(int contact_nodes) {
     int count = 0;
     const auto& cs = sim.contact_boundary().candidates();
     for (int k = 0; k + 1 < c.outermost; ++k) {  // the outermost node's strip is partly open
-      const double p = c.nodal_force[k] / cs[k].tributary_width;
+      const double p = c.nodal_force[k] / cs[k].tributary_measure;
       sum += std::pow((p - hertz::pressure(cs[k].x, a_hertz, c.force)) / p0, 2);
       ++count;
     }

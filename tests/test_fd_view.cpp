@@ -110,7 +110,7 @@ double layer_pressure_error(int contact_nodes) {
   int count = 0;
   for (int i = 0; i < c.outermost; ++i) {
     const int node = sim.mesh().node(i, sim.mesh().top_row());
-    const double p = -layer[node].normal_below / tributary_width(sim.mesh(), i);
+    const double p = -layer[node].normal_below / tributary_measure(sim.mesh(), i);
     sum += std::pow((p - hertz::pressure(sim.mesh().x(i), a, c.force)) / p0, 2);
     ++count;
   }

@@ -109,11 +109,11 @@ TEST_P(PatchTest, EveryConstantStrainStateIsExactOnAGradedMesh) {
   const ElasticMaterial material{210e9, 0.3};
   const StiffnessPattern pattern(mesh);
   ElasticStiffness stiffness(mesh, material, pattern);
-  const PlaneStrainMatrix d = material.stiffness();
+  const ConstitutiveMatrix d = material.stiffness();
   const struct {
     const char* name;
-    VoigtVector strain;  // (eps11, eps22, gamma12)
-  } states[] = {{"uniaxial x", {e, 0, 0}}, {"uniaxial y", {0, e, 0}}, {"shear", {0, 0, e}}};
+    VoigtVector strain;  // (eps11, eps22, gamma12, eps33 = 0)
+  } states[] = {{"uniaxial x", {e, 0, 0, 0}}, {"uniaxial y", {0, e, 0, 0}}, {"shear", {0, 0, e, 0}}};
   for (const auto& state : states) {
     SCOPED_TRACE(state.name);
     // u1 = eps11 x + gamma12 y / 2, u2 = eps22 y + gamma12 x / 2.

@@ -60,8 +60,7 @@ ElementVector gather(const Mesh& mesh, int ei, int ej, const double* u);
 
 /// The material state at one Gauss point of the committed solution.
 struct GaussPointState {
-  VoigtVector stress = VoigtVector::Zero();  ///< (sigma11, sigma22, sigma12) [Pa]
-  double stress33 = 0.0;                     ///< out-of-plane stress of plane strain [Pa]
+  VoigtVector stress = VoigtVector::Zero();  ///< (sigma11, sigma22, sigma12, sigma33) [Pa]: 33 out of plane or hoop
   double strain_intensity = 0.0;             ///< e_u
   double omega = 0.0;                        ///< Ilyushin's omega (0 when elastic)
   bool plastic = false;
@@ -100,8 +99,8 @@ public:
   virtual void restore(const std::vector<double>& history, const double* u) = 0;
 };
 
-/// Linear elasticity on the mesh: one closed-form matrix per pair of element size classes
-/// (a graded tensor mesh has few distinct rectangles), and the assembled stiffness K.
+/// Linear elasticity on the mesh: one element matrix per class of equal rectangles (the paper's
+/// closed form in plane strain, Gauss quadrature else), and the assembled stiffness K.
 class ElasticStiffness : public BulkModel {
 public:
   ElasticStiffness(const Mesh& mesh, const ElasticMaterial& material, const StiffnessPattern& pattern);
@@ -116,7 +115,7 @@ public:
   double max_strain_intensity() const override { return max_strain_intensity_; }
   std::array<GaussPointState, 4> gauss_point_states(int ei, int ej) const override;
   const ElementMatrix& cached_matrix(int ei, int ej) const {
-    return by_class_[mesh_.width_class(ei) * mesh_.height_classes() + mesh_.height_class(ej)];
+    return by_class_[mesh_.column_class(ei) * mesh_.height_classes() + mesh_.height_class(ej)];
   }
   const std::vector<double>& values() const { return values_; }
   const Mesh& mesh() const { return mesh_; }
@@ -134,7 +133,7 @@ private:
   double max_strain_intensity_ = 0.0;
 };
 
-/// Strain (eps11, eps22, gamma12) at each 2x2 Gauss point of element (ei, ej).
+/// Strain (eps11, eps22, gamma12, eps33) at each 2x2 Gauss point of element (ei, ej).
 std::array<VoigtVector, 4> gauss_point_strains(const Mesh& mesh, int ei, int ej, const double* u);
 /// The same from the element's 8 unknowns (paper order).
 std::array<VoigtVector, 4> gauss_point_strains(const Mesh& mesh, int ei, int ej, const ElementVector& ue);

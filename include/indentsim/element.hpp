@@ -15,19 +15,20 @@ namespace indentsim {
 
 using ElementMatrix = Eigen::Matrix<double, 8, 8>;
 using ElementVector = Eigen::Matrix<double, 8, 1>;
-/// Strain-displacement matrix: (eps11, eps22, gamma12) = B * element unknowns.
-using StrainDisplacement = Eigen::Matrix<double, 3, 8>;
+/// Strain-displacement matrix: (eps11, eps22, gamma12, eps33) = B * element unknowns.
+using StrainDisplacement = Eigen::Matrix<double, 4, 8>;
 
 struct Rectangle {
   double width = 0.0;   ///< h   (x extent)
   double height = 0.0;  ///< tau (y extent)
+  double x0 = 0.0;      ///< abscissa of its left side (the radius, in axisymmetry)
 };
 
-/// The element formulation.  `q1`: the paper's element, fully integrated (exact stiffness).
-/// `bbar`: mean dilatation (Hughes' B-bar) -- the in-plane dilatation eps11 + eps22 at each Gauss
-/// point is replaced by its element mean, eps_bar = eps + (theta_mean - theta)/2 (1, 1, 0); with
-/// eps33 = 0 this is the volumetric constraint that locks Q1 when nu -> 1/2 or under isochoric
-/// plastic flow, relaxed to one constraint per element.
+/// The element formulation.  `q1`: the paper's element, fully integrated (exact stiffness in plane
+/// strain).  `bbar`: mean dilatation (Hughes' B-bar) -- the dilatation at each Gauss point is
+/// replaced by its element mean: the volumetric constraint that locks Q1 when nu -> 1/2 or under
+/// isochoric plastic flow, relaxed to one constraint per element.  The B matrices of both are the
+/// kinematics' (include/indentsim/kinematics.hpp).
 enum class ElementKind { q1, bbar };
 
 /// Local index of the u / v unknown of vertex q (1-based as in the paper).
@@ -45,15 +46,5 @@ struct GaussPoint {
   double xi, eta, weight;
 };
 const std::array<GaussPoint, 4>& gauss_points_2x2();
-
-/// B at a point (xi, eta) of the rectangle (B-bar for ElementKind::bbar).
-StrainDisplacement strain_displacement(const Rectangle& rect, double xi, double eta,
-                                       ElementKind kind = ElementKind::q1);
-
-/// Stiffness by 2x2 Gauss quadrature with one constitutive matrix per Gauss point
-/// (exact for bilinear shape functions on a rectangle with constant D).
-ElementMatrix gauss_stiffness(const Rectangle& rect, const std::array<PlaneStrainMatrix, 4>& d,
-                              ElementKind kind = ElementKind::q1);
-ElementMatrix gauss_stiffness(const Rectangle& rect, const PlaneStrainMatrix& d, ElementKind kind = ElementKind::q1);
 
 }  // namespace indentsim

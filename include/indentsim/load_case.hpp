@@ -4,17 +4,30 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace indentsim {
 
+/// The scene: plane strain (a long cylinder or wedge on a block, per unit thickness) or
+/// axisymmetry (a body of revolution on a cylindrical specimen).
+enum class SceneKind { plane_strain, axisymmetric };
+
 struct GeometryInput {
-  double lx = 15e-3;  ///< block width of the half model [m]
-  double ly = 10e-3;  ///< block depth [m]
+  SceneKind kind = SceneKind::plane_strain;
+  double lx = 15e-3;  ///< block width of the half model, or the specimen's radius [m]
+  double ly = 10e-3;  ///< block depth, or the specimen's height [m]
 };
 
+enum class PunchShapeKind { sphere, cone, flat, profile };
+
 struct PunchInput {
-  double radius = 2e-3;  ///< rigid cylinder radius R [m]
+  PunchShapeKind shape = PunchShapeKind::sphere;
+  double radius = 2e-3;      ///< sphere (cylinder) radius, or the flat punch's radius R [m]
+  double half_angle = 70.3;  ///< cone: angle between axis and face [degrees]
+  double tip_radius = 0.0;   ///< cone: radius of the spherical cap blunting the tip (0: sharp) [m]
+  std::string profile_file;  ///< profile: the CSV file it was read from, as given ("" when inline)
+  std::vector<std::pair<double, double>> profile;  ///< profile: points (r, g(r)) [m]
 };
 
 enum class MaterialModel { elastic, ilyushin, j2 };
@@ -124,6 +137,8 @@ std::string keys_markdown();
 std::string first_physics_difference(const LoadCase& a, const LoadCase& b);
 
 std::string to_string(MaterialModel model);
+std::string to_string(SceneKind kind);
+std::string to_string(PunchShapeKind shape);
 std::string to_string(HardeningLaw law);
 
 }  // namespace indentsim

@@ -1,11 +1,17 @@
 #pragma once
 // Material laws (docs/MODEL.md §4-5).
 //
-// Linear elasticity in plane strain, and Ilyushin's small elasto-plastic deformations: a secant
-// law sigma = lambda~ tr(eps) I + 2 mu~ eps with lambda~ = lambda + (2/3) mu omega(e_u),
+// Linear elasticity, and Ilyushin's small elasto-plastic deformations: a secant law
+// sigma = lambda~ tr(eps) I + 2 mu~ eps with lambda~ = lambda + (2/3) mu omega(e_u),
 // mu~ = mu (1 - omega(e_u)).  Equivalently sigma = K tr(eps) I + 2 mu (1 - omega) e (e the
 // deviatoric strain): the bulk response stays elastic, only the deviatoric part softens.
-// Strains and stresses are in Voigt form (eps11, eps22, gamma12 = 2 eps12) / (s11, s22, s12).
+//
+// The laws are pointwise and know nothing of the element or the scene: strain in, stress and
+// tangent (and new history) out, in four Voigt components
+//   (eps11, eps22, gamma12 = 2 eps12, eps33) / (s11, s22, s12, s33),
+// 1 the in-plane horizontal (radial) direction, 2 the vertical, 3 the out-of-plane direction: in
+// plane strain eps33 = 0 and s33 is the out-of-plane stress; in axisymmetry 3 is the hoop
+// direction, eps33 = u_r / r.  The kinematics (include/indentsim/kinematics.hpp) makes the strain.
 #include <optional>
 #include <string>
 
@@ -15,9 +21,10 @@
 
 namespace indentsim {
 
-/// Plane-strain constitutive matrix acting on (eps11, eps22, gamma12 = 2 eps12).
-using PlaneStrainMatrix = Eigen::Matrix3d;
-using VoigtVector = Eigen::Vector3d;
+/// Strain or stress in Voigt form (11, 22, 12, 33); the shear strain is the engineering one.
+using VoigtVector = Eigen::Vector4d;
+/// d stress / d strain acting on VoigtVector.
+using ConstitutiveMatrix = Eigen::Matrix4d;
 
 struct LameConstants {
   double lambda = 0.0;
@@ -29,28 +36,27 @@ struct ElasticMaterial {
   double nu = 0.0;
 
   LameConstants lame() const;
-  /// E* = E / (1 - nu^2), the plane-strain modulus of Hertz line contact.
+  /// E* = E / (1 - nu^2), the contact modulus of Hertz and Sneddon (line and axisymmetric contact).
   double plane_strain_modulus() const { return E / (1.0 - nu * nu); }
   double bulk_modulus() const { return E / (3.0 * (1.0 - 2.0 * nu)); }
-  PlaneStrainMatrix stiffness() const;
+  ConstitutiveMatrix stiffness() const;
 };
 
-/// D for given Lamé constants: sigma = lambda tr(eps) I + 2 mu eps, eps33 = 0.
-PlaneStrainMatrix plane_strain_stiffness(const LameConstants& lame);
+/// D for given Lamé constants: sigma = lambda tr(eps) I + 2 mu eps on (11, 22, 12, 33).
+ConstitutiveMatrix isotropic_stiffness(const LameConstants& lame);
 
-/// e_u = (sqrt 2 / 3) sqrt((e11-e22)^2 + e22^2 + e11^2 + 6 e12^2) with eps33 = 0 (docs/MODEL.md §4);
+/// e_u = (sqrt 2 / 3) sqrt((e11-e22)^2 + (e22-e33)^2 + (e33-e11)^2 + 6 e12^2) (docs/MODEL.md §4);
 /// equal to sqrt(2/3 e:e) with e the deviatoric strain.
 double strain_intensity(const VoigtVector& strain);
 
 /// Response of the secant law at one strain.
 struct SecantResponse {
   VoigtVector stress = VoigtVector::Zero();
-  double stress33 = 0.0;          ///< sigma33 = lambda~ tr(eps) (plane strain)
   double strain_intensity = 0.0;  ///< e_u
   double omega = 0.0;             ///< omega(e_u)
   bool plastic = false;           ///< e_u > e0
-  PlaneStrainMatrix tangent = PlaneStrainMatrix::Zero();  ///< d sigma / d eps (consistent, symmetric)
-  PlaneStrainMatrix secant = PlaneStrainMatrix::Zero();   ///< sigma = secant * eps
+  ConstitutiveMatrix tangent = ConstitutiveMatrix::Zero();  ///< d sigma / d eps (consistent, symmetric)
+  ConstitutiveMatrix secant = ConstitutiveMatrix::Zero();   ///< sigma = secant * eps
 };
 
 /// Ilyushin's deformation theory with the linear or power hardening law for omega(e_u).
@@ -92,14 +98,13 @@ struct J2State {
 
 struct J2Response {
   VoigtVector stress = VoigtVector::Zero();
-  double stress33 = 0.0;
   J2State state;                 ///< the updated history (to be committed if the increment converges)
   bool plastic = false;          ///< the step yielded
   double equivalent_stress = 0.0;
-  PlaneStrainMatrix tangent = PlaneStrainMatrix::Zero();  ///< consistent (algorithmic) tangent
+  ConstitutiveMatrix tangent = ConstitutiveMatrix::Zero();  ///< consistent (algorithmic) tangent
 };
 
-/// Incremental J2 flow theory with isotropic hardening, plane strain.  Its hardening curve is the
+/// Incremental J2 flow theory with isotropic hardening (any kinematics: eps33 is given).  Its hardening curve is the
 /// uniaxial curve of an Ilyushin law: on proportional loading the equivalent plastic strain is
 /// eps_p = e_u omega(e_u) and the yield stress sigma_y = sigma_u(e_u) = 3 mu (1 - omega) e_u, so
 /// both models give the same stress (the conditions 0 < d(e_u omega)/de_u < 1 make the map

@@ -5,13 +5,16 @@
 // Nodes are numbered bottom-to-top, then left-to-right, as the paper numbers element
 // vertices: node(i, j) = i * ny + j, with x_i increasing in i and y_j increasing in j
 // (j = ny - 1 is the loaded surface y = 0).  Each node has two unknowns u (x) and v (y).
-// Dirichlet conditions of the model: u = v = 0 on the base y = -ly, u = 0 on the axis x = 0.
+// Dirichlet conditions of the model: u = v = 0 on the base y = -ly, u = 0 on the axis x = 0
+// (the symmetry plane of plane strain, the axis of revolution of axisymmetry).
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <vector>
 
 #include "indentsim/element.hpp"
+#include "indentsim/kinematics.hpp"
 #include "indentsim/load_case.hpp"
 
 namespace indentsim {
@@ -72,7 +75,7 @@ public:
   static int dof_v(int node) { return 2 * node + 1; }
 
   int element(int ei, int ej) const { return ei * elements_y() + ej; }
-  Rectangle rectangle(int ei, int ej) const { return {x_[ei + 1] - x_[ei], y_[ej + 1] - y_[ej]}; }
+  Rectangle rectangle(int ei, int ej) const { return {x_[ei + 1] - x_[ei], y_[ej + 1] - y_[ej], x_[ei]}; }
   /// Nodes of element (ei, ej) in the paper's vertex order.
   std::array<int, 4> element_nodes(int ei, int ej) const {
     return {node(ei, ej), node(ei, ej + 1), node(ei + 1, ej), node(ei + 1, ej + 1)};
@@ -87,6 +90,16 @@ public:
   /// The element formulation used on this mesh.
   ElementKind element_kind() const { return element_kind_; }
   void set_element_kind(ElementKind kind) { element_kind_ = kind; }
+  /// The scene's kinematics (plane strain unless set): B matrices, Gauss-point measures, units.
+  const Kinematics& kinematics() const { return *kinematics_; }
+  void set_scene(SceneKind kind) { kinematics_ = make_kinematics(kind); }
+
+  /// Elements whose elastic matrices are equal: the same width and height class, and in a
+  /// position-dependent kinematics (axisymmetry) the same column.  `column_class` numbers the
+  /// columns so that elements (ei, ej) and (ei', ej') share a matrix when their column classes
+  /// and height classes agree.
+  int column_class(int ei) const { return kinematics_->position_dependent() ? ei : width_class_[ei]; }
+  int column_classes() const { return kinematics_->position_dependent() ? elements_x() : width_classes_; }
 
   /// Classes of equal element widths / heights: elements of one class pair share a matrix.
   int width_class(int ei) const { return width_class_[ei]; }
@@ -101,6 +114,7 @@ private:
   std::vector<int> width_class_, height_class_;
   int width_classes_ = 0, height_classes_ = 0;
   ElementKind element_kind_ = ElementKind::q1;
+  std::shared_ptr<const Kinematics> kinematics_ = make_kinematics(SceneKind::plane_strain);
 };
 
 }  // namespace indentsim

@@ -20,8 +20,7 @@ namespace indentsim {
 /// The response of one Gauss point, with its committed history.
 struct PointResponse {
   VoigtVector stress = VoigtVector::Zero();
-  double stress33 = 0.0;
-  PlaneStrainMatrix tangent = PlaneStrainMatrix::Zero();
+  ConstitutiveMatrix tangent = ConstitutiveMatrix::Zero();
   double strain_intensity = 0.0;
   double omega = 0.0;
   bool plastic = false;  ///< on a plastic branch now
@@ -71,7 +70,7 @@ private:
   IlyushinLaw law_;
   bool unloading_rule_;
   bool loading_ = true;
-  PlaneStrainMatrix elastic_;
+  ConstitutiveMatrix elastic_;
   std::vector<VoigtVector, Eigen::aligned_allocator<VoigtVector>> peak_strain_;  // eps* per point
   std::vector<double> peak_intensity_;                                           // e_u(eps*) per point
 };
@@ -130,14 +129,14 @@ private:
   /// The four Gauss-point tangents of an inelastic element at its unknowns ue, from the force pass.
   struct KeptResponse {
     ElementVector ue;
-    std::array<PlaneStrainMatrix, 4> tangents;
+    std::array<ConstitutiveMatrix, 4> tangents;
   };
   /// True if any Gauss point of the element is inelastic at u (strains returned).
   bool inelastic(int ei, int ej, const double* u, std::array<VoigtVector, 4>& strains) const;
   bool inelastic(int ei, int ej, const ElementVector& ue, std::array<VoigtVector, 4>& strains) const;
   /// The element's internal force from its Gauss-point strains; the points' tangents too, if asked.
   ElementVector element_force(int ei, int ej, const std::array<VoigtVector, 4>& strains,
-                              std::array<PlaneStrainMatrix, 4>* tangents = nullptr) const;
+                              std::array<ConstitutiveMatrix, 4>* tangents = nullptr) const;
 
   const ElasticStiffness& elastic_;
   const Mesh& mesh_;

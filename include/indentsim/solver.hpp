@@ -77,7 +77,7 @@ enum class LinearSolverKind { klu, cholmod };
 struct NewtonSettings {
   LinearSolverKind linear = LinearSolverKind::klu;
   double displacement_scale = 1.0;  ///< typical |u| [m] (KINSOL's uscale = 1/this)
-  double force_scale = 1.0;         ///< typical |F| [N/m] (KINSOL's fscale = 1/this)
+  double force_scale = 1.0;         ///< typical |F| [N/m or N] (KINSOL's fscale = 1/this)
   double tolerance = 1e-11;         ///< on max |F| / force_scale
   int max_iterations = 50;
   /// Chord steps: a converging iteration keeps the last factorization (NewtonSolver).  Off, every

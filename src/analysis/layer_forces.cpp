@@ -24,15 +24,16 @@ std::vector<NodalLayerForces> nodal_layer_forces(const Mesh& mesh, const BulkMod
   return nodal;
 }
 
-double tributary_width(const Mesh& mesh, int i) {
-  const double left = i > 0 ? 0.5 * (mesh.x(i) - mesh.x(i - 1)) : 0.0;
-  const double right = i + 1 < mesh.nodes_x() ? 0.5 * (mesh.x(i + 1) - mesh.x(i)) : 0.0;
-  return left + right;
+double tributary_measure(const Mesh& mesh, int i) {
+  const double left = i > 0 ? mesh.x(i - 1) : mesh.x(i);
+  const double right = i + 1 < mesh.nodes_x() ? mesh.x(i + 1) : mesh.x(i);
+  return mesh.kinematics().tributary_measure(left, mesh.x(i), right);
 }
 
 std::vector<LayerForce> layer_forces(const Mesh& mesh, const std::vector<NodalLayerForces>& nodal) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   std::vector<LayerForce> layers(static_cast<std::size_t>(mesh.nodes_y()));
+  const double whole_body = mesh.kinematics().symmetry_factor();
   for (int j = 0; j < mesh.nodes_y(); ++j) {
     double below = 0.0, above = 0.0;
     for (int i = 0; i < mesh.nodes_x(); ++i) {
@@ -40,8 +41,8 @@ std::vector<LayerForce> layer_forces(const Mesh& mesh, const std::vector<NodalLa
       above += nodal[mesh.node(i, j)].normal_above;
     }
     layers[j].y = mesh.y(j);
-    layers[j].below = j > 0 ? -2.0 * below : nan;
-    layers[j].above = j < mesh.top_row() ? 2.0 * above : nan;
+    layers[j].below = j > 0 ? -whole_body * below : nan;
+    layers[j].above = j < mesh.top_row() ? whole_body * above : nan;
   }
   return layers;
 }

@@ -52,8 +52,8 @@ std::string toml_string(const std::string& s) {
 /// every few seconds.
 class Progress {
 public:
-  Progress(int increments, bool quiet)
-      : increments_(increments), quiet_(quiet), terminal_(isatty(fileno(stderr)) != 0), start_(clock::now()) {}
+  Progress(int increments, std::string force_unit, bool quiet)
+      : increments_(increments), force_unit_(std::move(force_unit)), quiet_(quiet), terminal_(isatty(fileno(stderr)) != 0), start_(clock::now()) {}
 
   void update(const IncrementRecord& r) {
     if (quiet_ || r.step == 0) return;
@@ -62,9 +62,9 @@ public:
     if (!terminal_ && seconds_since(last_) < 5.0 && r.step < increments_) return;
     last_ = clock::now();
     const double remaining = elapsed / r.step * std::max(0, increments_ - r.step);
-    const std::string line = fmt::format("increment {}/{}  alpha = {:.4g} m  P = {:.5g} N/m  Newton {}  elapsed {:.1f} s  "
+    const std::string line = fmt::format("increment {}/{}  alpha = {:.4g} m  P = {:.5g} {}  Newton {}  elapsed {:.1f} s  "
                                          "remaining ~{:.1f} s",
-                                         r.step, increments_, r.alpha, r.force, r.newton_iterations, elapsed, remaining);
+                                         r.step, increments_, r.alpha, r.force, force_unit_, r.newton_iterations, elapsed, remaining);
     if (terminal_) {
       fmt::print(stderr, "\r{}\033[K", line);
       shown_ = true;
@@ -86,6 +86,7 @@ private:
   using clock = std::chrono::steady_clock;
   static double seconds_since(clock::time_point t) { return std::chrono::duration<double>(clock::now() - t).count(); }
   int increments_;
+  std::string force_unit_;
   bool quiet_, terminal_, shown_ = false;
   clock::time_point start_, last_{};
 };
@@ -131,7 +132,8 @@ int drive(Simulation& sim, RunOutput& output, const std::string& label, bool qui
   const LoadCase& lc = sim.load_case();
   const fs::path checkpoint_dir = fs::path(lc.output.dir) / "checkpoints";
   const CheckpointSchedule schedule = CheckpointSchedule::of(lc);
-  Progress progress(static_cast<int>(plan_increments(lc.load).size()) - 1, quiet);
+  Progress progress(static_cast<int>(plan_increments(lc.load).size()) - 1,
+                    make_kinematics(lc.geometry.kind)->force_unit(), quiet);
   std::size_t warnings_shown = 0;
   const auto show_warnings = [&] {
     for (; warnings_shown < sim.warnings().size(); ++warnings_shown) {
@@ -321,7 +323,8 @@ int command_keys(bool markdown) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"indentsim: plane-strain indentation of an elasto-plastic block by a rigid cylindrical punch"};
+  CLI::App app{"indentsim: indentation of an elasto-plastic specimen by a rigid punch (plane strain or axisymmetric; "
+               "sphere, cone, flat or measured profile)"};
   app.require_subcommand(1);
   app.set_version_flag("--version", version_line());
   std::string file, out;

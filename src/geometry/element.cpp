@@ -1,5 +1,7 @@
 #include "indentsim/element.hpp"
 
+#include <cmath>
+
 namespace indentsim {
 
 ElementMatrix closed_form_stiffness(const Rectangle& rect, const LameConstants& lame) {
@@ -50,51 +52,6 @@ const std::array<GaussPoint, 4>& gauss_points_2x2() {
                                      GaussPoint{hi, lo, 0.25}, GaussPoint{hi, hi, 0.25}};
   }();
   return points;
-}
-
-namespace {
-StrainDisplacement q1_strain_displacement(const Rectangle& rect, double xi, double eta) {
-  // N1 = (1-xi)(1-eta), N2 = (1-xi) eta, N3 = xi (1-eta), N4 = xi eta.
-  const double dx[4] = {-(1 - eta) / rect.width, -eta / rect.width, (1 - eta) / rect.width,
-                        eta / rect.width};
-  const double dy[4] = {-(1 - xi) / rect.height, (1 - xi) / rect.height, -xi / rect.height,
-                        xi / rect.height};
-  StrainDisplacement b = StrainDisplacement::Zero();
-  for (int q = 0; q < 4; ++q) {
-    b(0, q) = dx[q];
-    b(1, 4 + q) = dy[q];
-    b(2, q) = dy[q];
-    b(2, 4 + q) = dx[q];
-  }
-  return b;
-}
-}  // namespace
-
-StrainDisplacement strain_displacement(const Rectangle& rect, double xi, double eta, ElementKind kind) {
-  StrainDisplacement b = q1_strain_displacement(rect, xi, eta);
-  if (kind == ElementKind::bbar) {
-    // The dilatation row's element mean is its value at the centre (it is linear in xi, eta).
-    const StrainDisplacement centre = q1_strain_displacement(rect, 0.5, 0.5);
-    const Eigen::Matrix<double, 1, 8> shift = 0.5 * ((centre.row(0) + centre.row(1)) - (b.row(0) + b.row(1)));
-    b.row(0) += shift;
-    b.row(1) += shift;
-  }
-  return b;
-}
-
-ElementMatrix gauss_stiffness(const Rectangle& rect, const std::array<PlaneStrainMatrix, 4>& d, ElementKind kind) {
-  ElementMatrix k = ElementMatrix::Zero();
-  const double area = rect.width * rect.height;
-  const auto& points = gauss_points_2x2();
-  for (std::size_t g = 0; g < points.size(); ++g) {
-    const StrainDisplacement b = strain_displacement(rect, points[g].xi, points[g].eta, kind);
-    k.noalias() += (points[g].weight * area) * b.transpose() * d[g] * b;
-  }
-  return k;
-}
-
-ElementMatrix gauss_stiffness(const Rectangle& rect, const PlaneStrainMatrix& d, ElementKind kind) {
-  return gauss_stiffness(rect, std::array<PlaneStrainMatrix, 4>{d, d, d, d}, kind);
 }
 
 }  // namespace indentsim

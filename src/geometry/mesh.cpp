@@ -9,7 +9,7 @@
 #include <fmt/format.h>
 
 #include "indentsim/error.hpp"
-#include "indentsim/hertz.hpp"
+#include "indentsim/punch.hpp"
 #include "indentsim/material.hpp"
 
 namespace indentsim {
@@ -124,8 +124,13 @@ double MeshPlan::estimated_bytes() const {
 MeshPlan plan_mesh(const LoadCase& lc, std::optional<double> measured_half_width) {
   const auto& m = lc.mesh;
   MeshPlan plan;
-  plan.contact_half_width_estimate = m.contact_half_width.value_or(measured_half_width.value_or(
-      hertz::estimate_half_width(lc.max_depth(), lc.punch.radius, lc.geometry.ly, lc.material.nu)));
+  // The contact estimate of the punch's shape (Hertz, Sneddon; docs/MODEL.md §6.1).  A flat punch's
+  // contact radius is its own: the mesh puts a node on its rim.
+  const auto punch = make_punch(lc.punch);
+  plan.contact_half_width_estimate =
+      punch->rim() ? *punch->rim()
+                   : m.contact_half_width.value_or(measured_half_width.value_or(
+                         punch->contact_estimate(lc.geometry.kind, lc.max_depth(), lc.geometry.ly, lc.material.nu)));
   const double a_star = plan.contact_half_width_estimate;
   plan.fine_spacing = a_star / static_cast<double>(m.contact_nodes);
   // The fine zone holds the contact with a margin for the estimate, and the layer below it
@@ -169,7 +174,9 @@ Mesh Mesh::from_plan(const LoadCase& lc, const MeshPlan& plan) {
   for (std::size_t k = 0; k < depth.size(); ++k) y[k] = -depth[depth.size() - 1 - k];
   y.back() = 0.0;
   y.front() = -lc.geometry.ly;
-  return Mesh(std::move(x), std::move(y));
+  Mesh mesh(std::move(x), std::move(y));
+  mesh.set_scene(lc.geometry.kind);
+  return mesh;
 }
 
 Mesh::Mesh(std::vector<double> x, std::vector<double> y) : x_(std::move(x)), y_(std::move(y)) {

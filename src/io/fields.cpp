@@ -31,7 +31,7 @@ NodalStresses average_to_nodes(const Mesh& mesh, const BulkModel& bulk) {
           v[0] += w * states[g].stress[0];
           v[1] += w * states[g].stress[1];
           v[2] += w * states[g].stress[2];
-          v[3] += w * states[g].stress33;
+          v[3] += w * states[g].stress[3];
           v[4] += w * states[g].strain_intensity;
         }
         for (int c = 0; c < 5; ++c) nodal.values[nodes[q]][c] += v[c];
@@ -77,7 +77,7 @@ std::string profiles_csv(const Mesh& mesh, const std::vector<int>& lines, const 
   for (int j : lines)
     for (int i = 0; i < mesh.nodes_x(); ++i) {
       const int n = mesh.node(i, j);
-      const double w = tributary_width(mesh, i);
+      const double w = tributary_measure(mesh, i);
       const auto& s = nodal.values[n];
       // On the axis the u row carries the symmetry condition's reaction, not a stress: sigma12
       // vanishes there by symmetry.
@@ -119,7 +119,7 @@ std::string vtu_document(const FieldFrame& frame, const Mesh& mesh, const double
   for (std::size_t k = 0; k < contact.candidates().size(); ++k) {
     const auto& c = contact.candidates()[k];
     status[c.node] = contact_state.in_contact[k] ? 1 : 0;
-    pressure[c.node] = c.tributary_width > 0 ? contact_state.nodal_force[k] / c.tributary_width : 0.0;
+    pressure[c.node] = c.tributary_measure > 0 ? contact_state.nodal_force[k] / c.tributary_measure : 0.0;
   }
   // Cell data: Gauss-point averages, the largest e_u, and the plastic flag.
   std::vector<std::array<double, 7>> cell(cells);
@@ -128,8 +128,7 @@ std::string vtu_document(const FieldFrame& frame, const Mesh& mesh, const double
       auto& c = cell[mesh.element(ei, ej)];
       c = {0, 0, 0, 0, 0, 0, 0};
       for (const GaussPointState& s : bulk.gauss_point_states(ei, ej)) {
-        for (int k = 0; k < 3; ++k) c[k] += 0.25 * s.stress[k];
-        c[3] += 0.25 * s.stress33;
+        for (int k = 0; k < 4; ++k) c[k] += 0.25 * s.stress[k];
         c[4] = std::max(c[4], s.strain_intensity);
         c[5] += 0.25 * s.omega;
         c[6] += s.plastic ? 1 : 0;
@@ -149,15 +148,17 @@ std::string vtu_document(const FieldFrame& frame, const Mesh& mesh, const double
   out += fmt::format("    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n", nodes, cells);
   out += "      <PointData Vectors=\"displacement\">\n";
   data_array(out, "Float64", "displacement", 3, nodes, displacement);
-  const char* stress_names[5] = {"sigma11", "sigma22", "sigma12", "sigma33", "strain_intensity"};
+  // Component 33 is the out-of-plane stress of plane strain, the hoop stress of axisymmetry.
+  const std::string third = mesh.kinematics().out_of_plane_stress();
+  const std::string stress_names[5] = {"sigma11", "sigma22", "sigma12", third, "strain_intensity"};
   for (int c = 0; c < 5; ++c)
-    data_array(out, "Float64", stress_names[c], 1, nodes, [&](std::size_t n, int) { return nodal.values[n][c]; });
+    data_array(out, "Float64", stress_names[c].c_str(), 1, nodes, [&](std::size_t n, int) { return nodal.values[n][c]; });
   data_array(out, "Int32", "contact_status", 1, nodes, [&](std::size_t n, int) { return status[n]; });
   data_array(out, "Float64", "contact_pressure", 1, nodes, [&](std::size_t n, int) { return pressure[n]; });
   out += "      </PointData>\n      <CellData>\n";
-  const char* cell_names[6] = {"sigma11", "sigma22", "sigma12", "sigma33", "strain_intensity", "omega"};
+  const std::string cell_names[6] = {"sigma11", "sigma22", "sigma12", third, "strain_intensity", "omega"};
   for (int c = 0; c < 6; ++c)
-    data_array(out, "Float64", cell_names[c], 1, cells, [&](std::size_t e, int) { return cell[e][c]; });
+    data_array(out, "Float64", cell_names[c].c_str(), 1, cells, [&](std::size_t e, int) { return cell[e][c]; });
   data_array(out, "Int32", "plastic", 1, cells, [&](std::size_t e, int) { return cell[e][6] > 0 ? 1 : 0; });
   data_array(out, "Int32", "plastic_points", 1, cells, [&](std::size_t e, int) { return cell[e][6]; });
   out += "      </CellData>\n      <Points>\n";

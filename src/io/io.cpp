@@ -30,14 +30,17 @@ std::string json_string(const std::string& text) {
 /// What summary.json says of the run besides its results: who wrote it, the units, the material.
 std::string run_fields(const LoadCase& lc) {
   const auto& m = lc.material;
+  const bool axisymmetric = lc.geometry.kind == SceneKind::axisymmetric;
   return fmt::format(
       "  \"indentsim\": {},\n"
-      "  \"units\": {{\"depth\": \"m\", \"force\": \"N/m (per unit thickness, both halves)\", "
-      "\"stiffness\": \"N/m per m\", \"stress\": \"Pa\"}},\n"
+      "  \"scene\": {{\"kind\": \"{}\", \"punch\": \"{}\"}},\n"
+      "  \"units\": {{\"depth\": \"m\", \"force\": \"{}\", \"stiffness\": \"{}\", \"stress\": \"Pa\"}},\n"
       "  \"model\": \"{}\",\n"
       "  \"material\": {{\"E\": {}, \"nu\": {}, \"e0\": {}, \"yield_stress\": {}, \"hardening\": \"{}\", "
       "\"kappa\": {}, \"n\": {}}},\n",
-      json_string(version_line()), to_string(m.model), m.E, m.nu, m.e0,
+      json_string(version_line()), to_string(lc.geometry.kind), to_string(lc.punch.shape),
+      axisymmetric ? "N (the whole specimen)" : "N/m (per unit thickness, both halves)",
+      axisymmetric ? "N/m" : "N/m per m", to_string(m.model), m.E, m.nu, m.e0,
       m.yield_stress.value_or(yield_stress_of_e0(m.e0, m.E, m.nu)),
       to_string(m.hardening), m.kappa, m.n);
 }

@@ -14,6 +14,7 @@
 #include <toml++/toml.h>
 
 #include "indentsim/error.hpp"
+#include "indentsim/profile_csv.hpp"
 #include "indentsim/version.hpp"
 
 namespace indentsim {
@@ -42,6 +43,14 @@ constexpr Choice<ElementChoice> element_names[] = {
 constexpr Choice<LinearSolverChoice> linear_names[] = {
     {"klu", LinearSolverChoice::klu}, {"cholmod", LinearSolverChoice::cholmod}, {"auto", LinearSolverChoice::automatic}};
 constexpr Choice<JacobianChoice> jacobian_names[] = {{"reuse", JacobianChoice::reuse}, {"fresh", JacobianChoice::fresh}};
+constexpr Choice<SceneKind> scene_names[] = {{"plane_strain", SceneKind::plane_strain},
+                                             {"axisymmetric", SceneKind::axisymmetric}};
+// "cylinder" is the plane-strain reading of "sphere": the same circular profile of punch.radius.
+constexpr Choice<PunchShapeKind> shape_names[] = {{"sphere", PunchShapeKind::sphere},
+                                                  {"cone", PunchShapeKind::cone},
+                                                  {"flat", PunchShapeKind::flat},
+                                                  {"profile", PunchShapeKind::profile},
+                                                  {"cylinder", PunchShapeKind::sphere}};
 constexpr Choice<FarFieldChoice> far_field_names[] = {
     {"auto", FarFieldChoice::automatic}, {"condense", FarFieldChoice::condense}, {"full", FarFieldChoice::full}};
 
@@ -56,6 +65,8 @@ const char* name_of(const Choice<E> (&names)[N], E value) {
 
 std::string to_string(MaterialModel model) { return name_of(model_names, model); }
 std::string to_string(HardeningLaw law) { return name_of(hardening_names, law); }
+std::string to_string(SceneKind kind) { return name_of(scene_names, kind); }
+std::string to_string(PunchShapeKind shape) { return name_of(shape_names, shape); }
 
 namespace {
 
@@ -115,7 +126,8 @@ std::string toml_numbers(const std::vector<double>& values) {
 
 class Reader {
 public:
-  Reader(const toml::table& root, std::string source) : root_(root), source_(std::move(source)) {}
+  Reader(const toml::table& root, std::string source, std::filesystem::path base_dir)
+      : root_(root), source_(std::move(source)), base_dir_(std::move(base_dir)) {}
 
   [[noreturn]] void fail(const std::string& key, const std::string& problem) const {
     throw InputError(source_, key, problem);
@@ -266,11 +278,37 @@ public:
     }
   }
 
+  /// punch.profile_points: an array of [r, g] pairs.
+  void read_points(const std::string& section, const std::string& key,
+                   std::vector<std::pair<double, double>>& target) const {
+    const toml::node* node = find(section, key);
+    if (!node) return;
+    const toml::array* array = node->as_array();
+    const std::string where = section + "." + key;
+    if (!array) fail(where, fmt::format("expected an array of [r, g] pairs, got {}", type_name(*node)));
+    target.clear();
+    for (std::size_t i = 0; i < array->size(); ++i) {
+      const toml::array* pair = array->get(i)->as_array();
+      if (!pair || pair->size() != 2) fail(where, fmt::format("element {} is not a pair [r, g]", i));
+      double values[2];
+      for (std::size_t c = 0; c < 2; ++c) {
+        const toml::node& item = *pair->get(c);
+        if (auto v = item.value_exact<double>()) values[c] = *v;
+        else if (auto n = item.value_exact<int64_t>()) values[c] = static_cast<double>(*n);
+        else fail(where, fmt::format("element {} holds {}, expected numbers", i, type_name(item)));
+      }
+      target.emplace_back(values[0], values[1]);
+    }
+  }
+
   const std::string& source() const { return source_; }
+  /// Where relative paths in the load case (punch.profile) are taken from: the file's folder.
+  const std::filesystem::path& base_dir() const { return base_dir_; }
 
 private:
   const toml::table& root_;
   std::string source_;
+  std::filesystem::path base_dir_;
 };
 
 // --set section.key=value: one key and one value.  The value is read as one TOML value ("1e-3",
@@ -323,8 +361,55 @@ void apply_override(toml::table& root, const std::string& text, const std::strin
 
 const std::vector<KeyDeclaration>& key_declarations();
 
-LoadCase from_table(const toml::table& root, const std::string& source) {
-  Reader r(root, source);
+/// The punch keys that apply to each shape; any other punch key given is a mistake.
+void check_punch_keys(const Reader& r, LoadCase& lc) {
+  struct ShapeKeys {
+    PunchShapeKind shape;
+    std::vector<std::string> keys;
+  };
+  const std::vector<ShapeKeys> table = {{PunchShapeKind::sphere, {"radius"}},
+                                        {PunchShapeKind::cone, {"half_angle", "tip_radius"}},
+                                        {PunchShapeKind::flat, {"radius"}},
+                                        {PunchShapeKind::profile, {"profile", "profile_points"}}};
+  const std::string shape = to_string(lc.punch.shape);
+  for (const auto& entry : table) {
+    if (entry.shape == lc.punch.shape) continue;
+    for (const auto& key : entry.keys) {
+      const bool applies = std::any_of(table.begin(), table.end(), [&](const ShapeKeys& e) {
+        return e.shape == lc.punch.shape && std::find(e.keys.begin(), e.keys.end(), key) != e.keys.end();
+      });
+      if (!applies && r.find("punch", key))
+        r.fail("punch." + key, fmt::format("does not apply to punch.shape = \"{}\" (it belongs to \"{}\")", shape,
+                                           to_string(entry.shape)));
+    }
+  }
+  switch (lc.punch.shape) {
+    case PunchShapeKind::sphere:
+    case PunchShapeKind::flat:
+      if (!r.find("punch", "radius"))
+        r.fail("punch.radius", fmt::format("missing key (punch.shape = \"{}\" needs its radius)", shape));
+      break;
+    case PunchShapeKind::cone:
+      if (!r.find("punch", "half_angle"))
+        r.fail("punch.half_angle", "missing key (punch.shape = \"cone\" needs its half-angle, e.g. 70.3 for the "
+                                   "Berkovich-equivalent cone)");
+      break;
+    case PunchShapeKind::profile: {
+      const bool file = r.find("punch", "profile") != nullptr, inline_points = r.find("punch", "profile_points") != nullptr;
+      if (file == inline_points)
+        r.fail("punch.profile", "punch.shape = \"profile\" needs exactly one of punch.profile (a CSV file of r, g) "
+                                "and punch.profile_points (an array of [r, g] pairs)");
+      if (file) {
+        const std::filesystem::path path = r.base_dir() / lc.punch.profile_file;
+        lc.punch.profile = read_profile_csv(path, r.source(), "punch.profile");
+      }
+      break;
+    }
+  }
+}
+
+LoadCase from_table(const toml::table& root, const std::string& source, const std::filesystem::path& base_dir) {
+  Reader r(root, source, base_dir);
   const auto& keys = key_declarations();
   r.check_structure(keys);
   LoadCase lc;
@@ -338,6 +423,7 @@ LoadCase from_table(const toml::table& root, const std::string& source) {
       r.fail("material.yield_stress", fmt::format("must be > 0 (got {})", *lc.material.yield_stress));
     lc.material.e0 = e0_of_yield_stress(*lc.material.yield_stress, lc.material.E, lc.material.nu);
   }
+  check_punch_keys(r, lc);
   validate(lc);
   return lc;
 }
@@ -394,14 +480,82 @@ KeyDeclaration choice_key(KeyDeclaration k, const Choice<E> (&names)[N], Access 
 const std::vector<KeyDeclaration>& key_declarations() {
   static const std::vector<KeyDeclaration> keys = [] {
     std::vector<KeyDeclaration> k;
+    k.push_back(choice_key({"geometry", "kind", "choice", "", "",
+                            "plane_strain (a long punch on a block, P per unit thickness in N/m), axisymmetric (a "
+                            "punch of revolution on a cylindrical specimen, P in N)"},
+                           scene_names, [](auto& c) -> auto& { return c.geometry.kind; }));
     k.push_back(number_key({"geometry", "lx", "number", "> 0", "m",
-                            "half width of the block (plane strain: the model is the half x >= 0 of a symmetric block)",
+                            "half width of the block (plane strain: the model is the half x >= 0 of a symmetric block); "
+                            "the specimen's radius in axisymmetry (its outer side free)",
                             true},
                            [](auto& c) -> auto& { return c.geometry.lx; }));
-    k.push_back(number_key({"geometry", "ly", "number", "> 0, > the deepest depth", "m", "depth of the block (its base is clamped)", true},
+    k.push_back(number_key({"geometry", "ly", "number", "> 0, > the deepest depth", "m",
+                            "depth of the block, height of the specimen (its base is clamped)", true},
                            [](auto& c) -> auto& { return c.geometry.ly; }));
-    k.push_back(number_key({"punch", "radius", "number", "> 0, > the deepest depth", "m", "punch radius R (a rigid cylinder)", true},
-                           [](auto& c) -> auto& { return c.punch.radius; }));
+    k.push_back(choice_key({"punch", "shape", "choice", "", "",
+                            "sphere (circular profile of radius R: a sphere in axisymmetry, a cylinder in plane "
+                            "strain; \"cylinder\" is a synonym), cone (a wedge in plane strain), flat (flat-ended), "
+                            "profile (a measured tip)"},
+                           shape_names, [](auto& c) -> auto& { return c.punch.shape; }));
+    {
+      KeyDeclaration radius{"punch", "radius", "number", "> 0, > the deepest depth (sphere)", "m",
+                            "sphere and flat: the punch radius R (required for them, refused for other shapes)"};
+      radius.read = [](const Reader& r, LoadCase& lc) { r.read_number("punch", "radius", lc.punch.radius); };
+      radius.write = [](const LoadCase& lc) -> std::optional<std::string> {
+        if (lc.punch.shape != PunchShapeKind::sphere && lc.punch.shape != PunchShapeKind::flat) return std::nullopt;
+        return toml_number(lc.punch.radius);
+      };
+      k.push_back(radius);
+    }
+    {
+      KeyDeclaration angle{"punch", "half_angle", "number", "(0, 90)", "degrees",
+                           "cone: angle between axis and face (70.3: Berkovich- and Vickers-equivalent; required for "
+                           "the cone)"};
+      angle.read = [](const Reader& r, LoadCase& lc) { r.read_number("punch", "half_angle", lc.punch.half_angle); };
+      angle.write = [](const LoadCase& lc) -> std::optional<std::string> {
+        if (lc.punch.shape != PunchShapeKind::cone) return std::nullopt;
+        return toml_number(lc.punch.half_angle);
+      };
+      k.push_back(angle);
+    }
+    {
+      KeyDeclaration tip{"punch", "tip_radius", "number", ">= 0, cap within the specimen", "m",
+                         "cone: radius of the spherical cap tangent to the face (a blunt tip; 0 = sharp)"};
+      tip.read = [](const Reader& r, LoadCase& lc) { r.read_number("punch", "tip_radius", lc.punch.tip_radius); };
+      tip.write = [](const LoadCase& lc) -> std::optional<std::string> {
+        if (lc.punch.shape != PunchShapeKind::cone) return std::nullopt;
+        return toml_number(lc.punch.tip_radius);
+      };
+      k.push_back(tip);
+    }
+    {
+      KeyDeclaration file{"punch", "profile", "string", "a CSV file of r, g(r)", "m",
+                          "profile: a measured tip, rows r, g(r) from r = 0, g(0) = 0, r increasing, g not "
+                          "decreasing (a header row is allowed); relative to the load case's folder"};
+      file.read = [](const Reader& r, LoadCase& lc) { r.read_string("punch", "profile", lc.punch.profile_file); };
+      file.write = [](const LoadCase& lc) -> std::optional<std::string> {
+        if (lc.punch.shape != PunchShapeKind::profile || lc.punch.profile_file.empty()) return std::nullopt;
+        std::ostringstream text;
+        text << toml::value<std::string>(lc.punch.profile_file);
+        return text.str() + " read into profile_points";
+      };
+      file.derived = true;  // case.toml holds the points themselves: a resumed run needs no file
+      k.push_back(file);
+    }
+    {
+      KeyDeclaration points{"punch", "profile_points", "array of [r, g] pairs", "as punch.profile", "m",
+                            "profile: the tip's points inline, instead of punch.profile (case.toml writes them so)"};
+      points.read = [](const Reader& r, LoadCase& lc) { r.read_points("punch", "profile_points", lc.punch.profile); };
+      points.write = [](const LoadCase& lc) -> std::optional<std::string> {
+        if (lc.punch.shape != PunchShapeKind::profile) return std::nullopt;
+        std::string text = "[";
+        for (std::size_t i = 0; i < lc.punch.profile.size(); ++i)
+          text += fmt::format("{}[{}, {}]", i ? ", " : "", toml_number(lc.punch.profile[i].first),
+                              toml_number(lc.punch.profile[i].second));
+        return text + "]";
+      };
+      k.push_back(points);
+    }
     k.push_back(choice_key({"material", "model", "choice", "", "",
                             "elastic; ilyushin (deformation theory, the paper's); j2 (flow theory)", true},
                            model_names, [](auto& c) -> auto& { return c.material.model; }));
@@ -495,7 +649,7 @@ const std::vector<KeyDeclaration>& key_declarations() {
       k.push_back(keep);
     }
     k.push_back(number_key({"solver", "tolerance", "number", "[1e-14, 1e-2)", "",
-                            "residual max-norm relative to E* times the deepest depth"},
+                            "residual max-norm relative to E* times the deepest depth (times 2 pi a* in axisymmetry: ring forces)"},
                            [](auto& c) -> auto& { return c.solver.tolerance; }));
     k.push_back(integer_key({"solver", "max_newton", "integer", "[1, 1000]", "", "Newton iterations per attempt"},
                             [](auto& c) -> auto& { return c.solver.max_newton; }));
@@ -519,7 +673,7 @@ const std::vector<KeyDeclaration>& key_declarations() {
 }
 
 LoadCase parse_and_override(const std::string& text, const std::string& source,
-                            const std::vector<std::string>& overrides) {
+                            const std::vector<std::string>& overrides, const std::filesystem::path& base_dir) {
   toml::table root;
   try {
     root = toml::parse(text, source);
@@ -529,10 +683,43 @@ LoadCase parse_and_override(const std::string& text, const std::string& source,
                      fmt::format("not valid TOML: {}", e.description()));
   }
   for (const auto& o : overrides) apply_override(root, o, source);
-  return from_table(root, source);
+  return from_table(root, source, base_dir);
 }
 
 }  // namespace
+
+/// A tip profile: r from 0 strictly increasing, g from 0 not decreasing, all finite, and high
+/// enough that the deepest depth stays on it.
+void validate_profile(const LoadCase& lc) {
+  const auto& points = lc.punch.profile;
+  const bool from_file = !lc.punch.profile_file.empty();
+  const std::string key = from_file ? "punch.profile" : "punch.profile_points";
+  const auto fail = [&](std::size_t k, const std::string& problem) {
+    throw InputError(lc.source, key,
+                     fmt::format("{}point {} {}", from_file ? printable(lc.punch.profile_file, 200) + ": " : "", k + 1,
+                                 problem));
+  };
+  if (points.size() < 2) throw InputError(lc.source, key, "a profile needs at least 2 points (r, g)");
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    const auto [r, g] = points[k];
+    if (!std::isfinite(r) || !std::isfinite(g)) fail(k, "is not finite");
+    if (k == 0 && (r != 0.0 || g != 0.0))
+      fail(k, fmt::format("is ({}, {}): the profile must start at the tip, r = 0, g = 0", r, g));
+    if (k > 0 && !(r > points[k - 1].first))
+      fail(k, fmt::format("has r = {} after r = {}: r must increase", r, points[k - 1].first));
+    if (k > 0 && g < points[k - 1].second)
+      fail(k, fmt::format("has g = {} after g = {}: the profile must not descend (not monotone)", g,
+                          points[k - 1].second));
+  }
+  if (!(points.back().second > lc.max_depth()))
+    throw InputError(lc.source, key,
+                     fmt::format("the profile rises only {} m, not above the deepest depth {} m: the specimen would "
+                                 "reach beyond the measured tip",
+                                 points.back().second, lc.max_depth()));
+  if (!(points.back().first < lc.geometry.lx))
+    throw InputError(lc.source, key, fmt::format("reaches r = {} m, beyond the specimen (geometry.lx = {} m)",
+                                                 points.back().first, lc.geometry.lx));
+}
 
 void validate(const LoadCase& lc) {
   const auto fail = [&](const std::string& key, const std::string& problem) {
@@ -543,7 +730,25 @@ void validate(const LoadCase& lc) {
   };
   positive("geometry.lx", lc.geometry.lx);
   positive("geometry.ly", lc.geometry.ly);
-  positive("punch.radius", lc.punch.radius);
+  const auto& punch = lc.punch;
+  const bool has_radius = punch.shape == PunchShapeKind::sphere || punch.shape == PunchShapeKind::flat;
+  if (has_radius) positive("punch.radius", punch.radius);
+  if (punch.shape == PunchShapeKind::flat && !(punch.radius < lc.geometry.lx))
+    fail("punch.radius", fmt::format("the flat punch ({} m) is not narrower than the specimen (geometry.lx = {} m)",
+                                     punch.radius, lc.geometry.lx));
+  if (punch.shape == PunchShapeKind::cone) {
+    if (!(punch.half_angle > 0.0 && punch.half_angle < 90.0))
+      fail("punch.half_angle", fmt::format("must lie in (0, 90) degrees, the angle between axis and face (got {})",
+                                           punch.half_angle));
+    if (!(punch.tip_radius >= 0.0))
+      fail("punch.tip_radius", fmt::format("must be >= 0 (got {})", punch.tip_radius));
+    const double cap = punch.tip_radius * std::cos(punch.half_angle * std::acos(-1.0) / 180.0);
+    if (!(cap < lc.geometry.lx))
+      fail("punch.tip_radius", fmt::format("the spherical cap of radius {} m meets the face at r = {:.4g} m, beyond "
+                                           "the specimen (geometry.lx = {} m): it does not fit",
+                                           punch.tip_radius, cap, lc.geometry.lx));
+  }
+  if (punch.shape == PunchShapeKind::profile && !lc.load.path.empty()) validate_profile(lc);
   positive("material.E", lc.material.E);
   // Stresses and forces are E times O(1) numbers and their squares are formed (norms, J2); beyond
   // these bounds double precision cannot hold them.  Plausible moduli are warned about, not here.
@@ -570,12 +775,12 @@ void validate(const LoadCase& lc) {
   if (!(lc.max_depth() > 0.0)) fail("load.path", "never indents: every waypoint is 0");
   // The gap g(x) = R - sqrt(R^2 - x^2) and the displacements are resolved against R and the
   // block in double precision: a depth below 1e-9 of them is round-off, not an indentation.
-  const double resolvable = 1e-9 * std::max(lc.punch.radius, lc.geometry.ly);
+  const double resolvable = 1e-9 * std::max(has_radius ? lc.punch.radius : 0.0, lc.geometry.ly);
   if (lc.max_depth() < resolvable)
     fail("load.path", fmt::format("the deepest depth {:g} m is below what double precision resolves against the "
                                   "punch radius and the block ({:g} m, 1e-9 of them)",
                                   lc.max_depth(), resolvable));
-  if (lc.max_depth() >= lc.punch.radius)
+  if (punch.shape == PunchShapeKind::sphere && lc.max_depth() >= lc.punch.radius)
     fail("load.path", fmt::format("depth {} reaches the punch radius {}: no circular contact possible",
                                   lc.max_depth(), lc.punch.radius));
   if (lc.max_depth() >= lc.geometry.ly)
@@ -590,6 +795,8 @@ void validate(const LoadCase& lc) {
 
   if (lc.mesh.contact_nodes < 2) fail("mesh.contact_nodes", fmt::format("must be >= 2 (got {})", lc.mesh.contact_nodes));
   if (lc.mesh.contact_half_width) positive("mesh.contact_half_width", *lc.mesh.contact_half_width);
+  if (lc.mesh.contact_half_width && punch.shape == PunchShapeKind::flat)
+    fail("mesh.contact_half_width", "a flat punch's contact radius is punch.radius: the mesh is sized from it");
   if (lc.mesh.fine_width) positive("mesh.fine_width", *lc.mesh.fine_width);
   if (lc.mesh.fine_depth) positive("mesh.fine_depth", *lc.mesh.fine_depth);
   if (lc.mesh.growth && !(*lc.mesh.growth >= 1.0 && *lc.mesh.growth <= 2.0))
@@ -685,7 +892,7 @@ std::string first_physics_difference(const LoadCase& a, const LoadCase& b) {
 
 LoadCase parse_load_case(const std::string& toml_text, const std::string& source,
                          const std::vector<std::string>& overrides) {
-  return parse_and_override(toml_text, source, overrides);
+  return parse_and_override(toml_text, source, overrides, std::filesystem::current_path());
 }
 
 LoadCase read_load_case(const std::filesystem::path& file, const std::vector<std::string>& overrides) {
@@ -697,7 +904,7 @@ LoadCase read_load_case(const std::filesystem::path& file, const std::vector<std
   if (!in) throw InputError(source, "", "cannot open for reading");
   std::ostringstream text;
   text << in.rdbuf();
-  return parse_and_override(text.str(), source, overrides);
+  return parse_and_override(text.str(), source, overrides, file.parent_path().empty() ? "." : file.parent_path());
 }
 
 }  // namespace indentsim

@@ -10,19 +10,22 @@ LameConstants ElasticMaterial::lame() const {
   return {E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)), E / (2.0 * (1.0 + nu))};
 }
 
-PlaneStrainMatrix ElasticMaterial::stiffness() const { return plane_strain_stiffness(lame()); }
+ConstitutiveMatrix ElasticMaterial::stiffness() const { return isotropic_stiffness(lame()); }
 
-PlaneStrainMatrix plane_strain_stiffness(const LameConstants& l) {
-  PlaneStrainMatrix d;
-  d << l.lambda + 2.0 * l.mu, l.lambda, 0.0,  //
-      l.lambda, l.lambda + 2.0 * l.mu, 0.0,   //
-      0.0, 0.0, l.mu;
+ConstitutiveMatrix isotropic_stiffness(const LameConstants& l) {
+  const double l2m = l.lambda + 2.0 * l.mu;
+  ConstitutiveMatrix d;
+  d << l2m, l.lambda, 0.0, l.lambda,  //
+      l.lambda, l2m, 0.0, l.lambda,   //
+      0.0, 0.0, l.mu, 0.0,            //
+      l.lambda, l.lambda, 0.0, l2m;
   return d;
 }
 
 double strain_intensity(const VoigtVector& s) {
-  const double e11 = s[0], e22 = s[1], e12 = 0.5 * s[2];
-  const double sum = (e11 - e22) * (e11 - e22) + e22 * e22 + e11 * e11 + 6.0 * e12 * e12;
+  const double e11 = s[0], e22 = s[1], e12 = 0.5 * s[2], e33 = s[3];
+  const double sum =
+      (e11 - e22) * (e11 - e22) + (e22 - e33) * (e22 - e33) + (e33 - e11) * (e33 - e11) + 6.0 * e12 * e12;
   return std::sqrt(2.0) / 3.0 * std::sqrt(sum);
 }
 
@@ -59,17 +62,17 @@ SecantResponse IlyushinLaw::respond(const VoigtVector& strain) const {
 
   // Secant: lambda~ = lambda + (2/3) mu omega, mu~ = mu (1 - omega).
   const LameConstants secant{lame_.lambda + 2.0 / 3.0 * mu * omega_value, mu * (1.0 - omega_value)};
-  r.secant = plane_strain_stiffness(secant);
+  r.secant = isotropic_stiffness(secant);
   r.stress = r.secant * strain;
-  r.stress33 = secant.lambda * (strain[0] + strain[1]);
 
-  // Consistent tangent C = K I(x)I + 2 mu (1-omega) I_dev - (4 mu / 3)(omega'/e_u) e(x)e, restricted
-  // to (11, 22, 12) with the engineering shear column (docs/MODEL.md §4).  Below the limit omega' = 0
-  // and C = D_elastic.
+  // Consistent tangent C = K I(x)I + 2 mu (1-omega) I_dev - (4 mu / 3)(omega'/e_u) e(x)e on
+  // (11, 22, 12, 33) with the engineering shear column (docs/MODEL.md §4).  Below the limit
+  // omega' = 0 and C = D_elastic.
   r.tangent = r.secant;
   if (r.plastic) {
-    const double trace = strain[0] + strain[1];
-    const Eigen::Vector3d deviator(strain[0] - trace / 3.0, strain[1] - trace / 3.0, 0.5 * strain[2]);
+    const double trace = strain[0] + strain[1] + strain[3];
+    const VoigtVector deviator(strain[0] - trace / 3.0, strain[1] - trace / 3.0, 0.5 * strain[2],
+                               strain[3] - trace / 3.0);
     const double c = 4.0 * mu / 3.0 * omega_derivative(e_u) / e_u;
     r.tangent -= c * deviator * deviator.transpose();
   }
@@ -122,9 +125,10 @@ double J2Law::yield_stress(double eps_p, double* hardening_modulus) const {
 J2Response J2Law::respond(const VoigtVector& strain, const J2State& old) const {
   J2Response r;
   r.state = old;
-  const double trace = strain[0] + strain[1];
-  // Deviatoric total strain as a tensor (11, 22, 33, 12), eps33 = 0.
-  const Eigen::Vector4d e(strain[0] - trace / 3.0, strain[1] - trace / 3.0, -trace / 3.0, 0.5 * strain[2]);
+  const double trace = strain[0] + strain[1] + strain[3];
+  // Deviatoric total strain as a tensor (11, 22, 33, 12).
+  const Eigen::Vector4d e(strain[0] - trace / 3.0, strain[1] - trace / 3.0, strain[3] - trace / 3.0,
+                          0.5 * strain[2]);
   const auto tensor_norm = [](const Eigen::Vector4d& t) {
     return std::sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2] + 2.0 * t[3] * t[3]);
   };
@@ -158,17 +162,18 @@ J2Response J2Law::respond(const VoigtVector& strain, const J2State& old) const {
     theta_bar = 1.0 / (1.0 + hardening / (3.0 * mu_)) - (1.0 - theta);
   }
   const double pressure = bulk_ * trace;
-  r.stress = VoigtVector(pressure + deviator[0], pressure + deviator[1], deviator[3]);
-  r.stress33 = pressure + deviator[2];
+  r.stress = VoigtVector(pressure + deviator[0], pressure + deviator[1], deviator[3], pressure + deviator[2]);
   r.equivalent_stress = std::sqrt(1.5) * tensor_norm(deviator);
 
-  // C = K I(x)I + 2 mu theta I_dev - 2 mu theta_bar n(x)n on (11, 22, gamma12).
+  // C = K I(x)I + 2 mu theta I_dev - 2 mu theta_bar n(x)n on (11, 22, gamma12, 33).
   const double m = mu_ * theta;
-  r.tangent << bulk_ + 4.0 / 3.0 * m, bulk_ - 2.0 / 3.0 * m, 0.0,  //
-      bulk_ - 2.0 / 3.0 * m, bulk_ + 4.0 / 3.0 * m, 0.0,           //
-      0.0, 0.0, m;
+  const double diagonal = bulk_ + 4.0 / 3.0 * m, off = bulk_ - 2.0 / 3.0 * m;
+  r.tangent << diagonal, off, 0.0, off,  //
+      off, diagonal, 0.0, off,           //
+      0.0, 0.0, m, 0.0,                  //
+      off, off, 0.0, diagonal;
   if (r.plastic) {
-    const Eigen::Vector3d nv(n[0], n[1], n[3]);
+    const VoigtVector nv(n[0], n[1], n[3], n[2]);
     r.tangent -= 2.0 * mu_ * theta_bar * nv * nv.transpose();
   }
   return r;

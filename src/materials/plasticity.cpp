@@ -24,7 +24,7 @@ PointResponse IlyushinPointLaw::respond(std::size_t point, const VoigtVector& st
   PointResponse r;
   if (loading_) {
     const SecantResponse s = law_.respond(strain);
-    r = {s.stress, s.stress33, s.tangent, s.strain_intensity, s.omega, s.plastic};
+    r = {s.stress, s.tangent, s.strain_intensity, s.omega, s.plastic};
     return r;
   }
   // Elastic unloading (or reloading) from the peak state.
@@ -32,7 +32,6 @@ PointResponse IlyushinPointLaw::respond(std::size_t point, const VoigtVector& st
   const SecantResponse at_peak = law_.respond(peak);
   const VoigtVector change = strain - peak;
   r.stress = at_peak.stress + elastic_ * change;
-  r.stress33 = at_peak.stress33 + law_.lame().lambda * (change[0] + change[1]);
   r.tangent = elastic_;
   r.strain_intensity = strain_intensity(strain);
   r.omega = at_peak.omega;
@@ -48,21 +47,22 @@ void IlyushinPointLaw::commit(std::size_t point, const VoigtVector& strain) {
 
 std::vector<double> IlyushinPointLaw::history() const {
   std::vector<double> h;
-  h.reserve(1 + 4 * peak_intensity_.size());
+  h.reserve(1 + 5 * peak_intensity_.size());
   h.push_back(loading_ ? 1.0 : 0.0);
   for (std::size_t p = 0; p < peak_intensity_.size(); ++p) {
-    h.insert(h.end(), {peak_strain_[p][0], peak_strain_[p][1], peak_strain_[p][2], peak_intensity_[p]});
+    h.insert(h.end(), {peak_strain_[p][0], peak_strain_[p][1], peak_strain_[p][2], peak_strain_[p][3],
+                       peak_intensity_[p]});
   }
   return h;
 }
 
 void IlyushinPointLaw::restore(const std::vector<double>& h) {
-  if (h.size() != 1 + 4 * peak_intensity_.size())
+  if (h.size() != 1 + 5 * peak_intensity_.size())
     throw std::invalid_argument("Ilyushin history of the wrong size for this mesh");
   loading_ = h[0] != 0.0;
   for (std::size_t p = 0; p < peak_intensity_.size(); ++p) {
-    peak_strain_[p] = VoigtVector(h[1 + 4 * p], h[2 + 4 * p], h[3 + 4 * p]);
-    peak_intensity_[p] = h[4 + 4 * p];
+    peak_strain_[p] = VoigtVector(h[1 + 5 * p], h[2 + 5 * p], h[3 + 5 * p], h[4 + 5 * p]);
+    peak_intensity_[p] = h[5 + 5 * p];
   }
 }
 
@@ -81,7 +81,6 @@ PointResponse J2PointLaw::respond(std::size_t point, const VoigtVector& strain) 
   const J2Response j = law_.respond(strain, state_[point]);
   PointResponse r;
   r.stress = j.stress;
-  r.stress33 = j.stress33;
   r.tangent = j.tangent;
   r.strain_intensity = strain_intensity(strain);
   r.plastic = j.plastic;
@@ -141,18 +140,15 @@ bool InelasticBulk::inelastic_at(int ei, int ej, const double* u) const {
 }
 
 ElementVector InelasticBulk::element_force(int ei, int ej, const std::array<VoigtVector, 4>& strains,
-                                           std::array<PlaneStrainMatrix, 4>* tangents) const {
-  const Rectangle rect = mesh_.rectangle(ei, ej);
+                                           std::array<ConstitutiveMatrix, 4>* tangents) const {
   const std::size_t first = 4 * static_cast<std::size_t>(mesh_.element(ei, ej));
-  const auto& points = gauss_points_2x2();
-  ElementVector fe = ElementVector::Zero();
-  for (std::size_t g = 0; g < points.size(); ++g) {
+  std::array<VoigtVector, 4> stresses;
+  for (std::size_t g = 0; g < 4; ++g) {
     const PointResponse r = law_->respond(first + g, strains[g]);
-    const StrainDisplacement b = strain_displacement(rect, points[g].xi, points[g].eta, mesh_.element_kind());
-    fe.noalias() += (points[g].weight * rect.width * rect.height) * b.transpose() * r.stress;
+    stresses[g] = r.stress;
     if (tangents) (*tangents)[g] = r.tangent;
   }
-  return fe;
+  return mesh_.kinematics().internal_force(mesh_.rectangle(ei, ej), stresses, mesh_.element_kind());
 }
 
 void InelasticBulk::add_force_corrections(const std::vector<ElementSlot>& slots, const double* u, double* f) const {
@@ -175,7 +171,7 @@ void InelasticBulk::add_tangent_corrections(const std::vector<ElementSlot>& slot
                                             double* values) const {
   ElementVector ue;
   std::array<VoigtVector, 4> strains;
-  std::array<PlaneStrainMatrix, 4> d;
+  std::array<ConstitutiveMatrix, 4> d;
   for (const ElementSlot& slot : slots) {
     for (int a = 0; a < 8; ++a) ue[a] = slot.unknowns[a] < 0 ? 0.0 : u[slot.unknowns[a]];
     const int element = mesh_.element(slot.ei, slot.ej);
@@ -188,7 +184,8 @@ void InelasticBulk::add_tangent_corrections(const std::vector<ElementSlot>& slot
       for (std::size_t g = 0; g < 4; ++g) d[g] = law_->respond(first + g, strains[g]).tangent;
     }
     const ElementMatrix correction =
-        gauss_stiffness(mesh_.rectangle(slot.ei, slot.ej), d, mesh_.element_kind()) - elastic_.cached_matrix(slot.ei, slot.ej);
+        mesh_.kinematics().stiffness(mesh_.rectangle(slot.ei, slot.ej), d, mesh_.element_kind()) -
+        elastic_.cached_matrix(slot.ei, slot.ej);
     for (int p = 0; p < 64; ++p)
       if (slot.positions[p] >= 0) values[slot.positions[p]] += correction(p / 8, p % 8);
   }
@@ -244,7 +241,7 @@ std::array<GaussPointState, 4> InelasticBulk::gauss_point_states(int ei, int ej)
   std::array<GaussPointState, 4> states;
   for (std::size_t g = 0; g < 4; ++g) {
     const PointResponse r = law_->respond(first + g, strains[g]);
-    states[g] = {r.stress, r.stress33, r.strain_intensity, r.omega, law_->has_yielded(first + g)};
+    states[g] = {r.stress, r.strain_intensity, r.omega, law_->has_yielded(first + g)};
   }
   return states;
 }

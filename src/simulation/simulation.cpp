@@ -20,7 +20,6 @@ namespace {
 // meshes tried (1.6x at 684 unknowns, 2.1x at 1860, 6.2x at 40k); below ~1000 unknowns both take
 // milliseconds and KLU, the user's default, is kept.
 constexpr int cholmod_crossover_unknowns = 1000;
-constexpr double max_relative_depth = 0.05;  // alpha / R beyond which the run warns
 constexpr double max_relative_contact = 0.1;  // a / lx and a / ly beyond which the run warns
 constexpr double min_plausible_modulus = 1e3, max_plausible_modulus = 2e12;  // [Pa]
 
@@ -38,7 +37,8 @@ struct PilotResult {
 
 PilotResult pilot_run(const LoadCase& lc) {
   const double depth = lc.max_depth();
-  const double chord = std::sqrt(2.0 * lc.punch.radius * depth - depth * depth);
+  // Where the punch meets the undeformed surface: the sphere's chord sqrt(2 R alpha - alpha^2).
+  const double chord = make_punch(lc.punch)->geometric_contact_radius(depth);
   LoadCase pilot = lc;
   pilot.mesh = MeshInput{};
   pilot.mesh.contact_nodes = 8;
@@ -140,13 +140,8 @@ std::vector<std::string> plausibility_warnings(const LoadCase& lc, const MeshPla
                                    "pascals are meant (210 GPa is 210e9)",
                                    lc.material.E, min_plausible_modulus, max_plausible_modulus));
   // The model is small-strain with the gap measured vertically (docs/MODEL.md §3): both need slopes
-  // and depths small against the punch radius.
-  const double relative_depth = lc.max_depth() / lc.punch.radius;
-  if (relative_depth > max_relative_depth)
-    warnings.push_back(fmt::format("the depth reaches {:.3g} R: the small-strain contact model (vertical gap, "
-                                   "small slopes) is being pushed beyond its range (alpha / R up to {:.2g}); "
-                                   "read the results as qualitative",
-                                   relative_depth, max_relative_depth));
+  // and depths small against the punch's size.
+  if (auto slope = make_punch(lc.punch)->slope_warning(lc.max_depth())) warnings.push_back(*slope);
   // A contact that is not small against the specimen: its edges and base shape P well beyond the
   // discretization error (README, "Choosing the specimen").
   const double a = plan.contact_half_width_estimate;
@@ -204,10 +199,12 @@ Simulation::Simulation(LoadCase load_case, std::optional<double> planned_contact
     plastic_ = std::make_unique<InelasticBulk>(*stiffness_, std::move(point_law));
     bulk_ = plastic_.get();
   }
-  contact_ = std::make_unique<ContactBoundary>(*mesh_, CylindricalPunch{load_case_.punch.radius}, *pattern_,
-                                               stiffness_->values());
+  contact_ = std::make_unique<ContactBoundary>(*mesh_, make_punch(load_case_.punch), *pattern_, stiffness_->values());
   settings_.displacement_scale = load_case_.max_depth();
-  settings_.force_scale = material.plane_strain_modulus() * load_case_.max_depth();
+  // Newton's residual is measured against the nodal forces of the scene: E* alpha_max per unit
+  // thickness in plane strain, times the ring 2 pi a* in axisymmetry (docs/DESIGN.md §3).
+  settings_.force_scale = mesh_->kinematics().nodal_force_scale(
+      material.plane_strain_modulus() * load_case_.max_depth(), plan_.contact_half_width_estimate);
   settings_.tolerance = load_case_.solver.tolerance;
   settings_.max_iterations = load_case_.solver.max_newton;
   settings_.chord_steps = load_case_.solver.jacobian == JacobianChoice::reuse;

@@ -117,19 +117,21 @@ ElementVector gather(const Mesh& mesh, int ei, int ej, const double* u) {
 ElasticStiffness::ElasticStiffness(const Mesh& mesh, const ElasticMaterial& material,
                                    const StiffnessPattern& pattern)
     : mesh_(mesh), pattern_(pattern) {
-  // One representative rectangle per (width class, height class).
-  std::vector<double> widths(mesh.width_classes()), heights(mesh.height_classes());
-  for (int ei = 0; ei < mesh.elements_x(); ++ei) widths[mesh.width_class(ei)] = mesh.rectangle(ei, 0).width;
+  // One representative rectangle per (column class, height class): a graded tensor mesh has few
+  // distinct rectangles (in axisymmetry every column differs, the rows still repeat).
+  std::vector<Rectangle> columns(mesh.column_classes());
+  std::vector<double> heights(mesh.height_classes());
+  for (int ei = 0; ei < mesh.elements_x(); ++ei) columns[mesh.column_class(ei)] = mesh.rectangle(ei, 0);
   for (int ej = 0; ej < mesh.elements_y(); ++ej) heights[mesh.height_class(ej)] = mesh.rectangle(0, ej).height;
   const LameConstants lame = material.lame();
   lame_ = lame;
-  by_class_.resize(static_cast<std::size_t>(mesh.width_classes()) * mesh.height_classes());
-  for (int w = 0; w < mesh.width_classes(); ++w)
-    for (int h = 0; h < mesh.height_classes(); ++h)
-      by_class_[w * mesh.height_classes() + h] =
-          mesh.element_kind() == ElementKind::q1
-              ? closed_form_stiffness({widths[w], heights[h]}, lame)  // the paper's exact element
-              : gauss_stiffness({widths[w], heights[h]}, plane_strain_stiffness(lame), ElementKind::bbar);
+  by_class_.resize(static_cast<std::size_t>(mesh.column_classes()) * mesh.height_classes());
+  for (int c = 0; c < mesh.column_classes(); ++c)
+    for (int h = 0; h < mesh.height_classes(); ++h) {
+      Rectangle rect = columns[c];
+      rect.height = heights[h];
+      by_class_[c * mesh.height_classes() + h] = mesh.kinematics().elastic_stiffness(rect, lame, mesh.element_kind());
+    }
 
   values_.assign(static_cast<std::size_t>(pattern.nonzeros()), 0.0);
   for (int ei = 0; ei < mesh.elements_x(); ++ei)
@@ -161,10 +163,9 @@ std::array<GaussPointState, 4> ElasticStiffness::gauss_point_states(int ei, int 
   std::array<GaussPointState, 4> states;
   if (committed_u_.empty()) return states;
   const auto strains = gauss_point_strains(mesh_, ei, ej, committed_u_.data());
-  const PlaneStrainMatrix d = plane_strain_stiffness(lame_);
+  const ConstitutiveMatrix d = isotropic_stiffness(lame_);
   for (int g = 0; g < 4; ++g) {
     states[g].stress = d * strains[g];
-    states[g].stress33 = lame_.lambda * (strains[g][0] + strains[g][1]);
     states[g].strain_intensity = strain_intensity(strains[g]);
   }
   return states;
@@ -179,7 +180,7 @@ std::array<VoigtVector, 4> gauss_point_strains(const Mesh& mesh, int ei, int ej,
   const auto& points = gauss_points_2x2();
   std::array<VoigtVector, 4> strains;
   for (std::size_t g = 0; g < points.size(); ++g)
-    strains[g] = strain_displacement(rect, points[g].xi, points[g].eta, mesh.element_kind()) * ue;
+    strains[g] = mesh.kinematics().strain_displacement(rect, points[g].xi, points[g].eta, mesh.element_kind()) * ue;
   return strains;
 }
 

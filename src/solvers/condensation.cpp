@@ -194,7 +194,7 @@ FarFieldCondensation::FarFieldCondensation(const ElasticStiffness& stiffness, co
     c.equation = near_of_[c.equation];
     c.scale = values_[pattern_->diagonal_position(c.equation)];
   }
-  contact_ = std::make_unique<ContactBoundary>(contact.punch(), std::move(candidates));
+  contact_ = std::make_unique<ContactBoundary>(contact.punch_shape(), contact.symmetry_factor(), std::move(candidates));
 
   for (int ei = 0; ei < columns; ++ei)
     for (int ej = top - rows + 1; ej <= top; ++ej) {

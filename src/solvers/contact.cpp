@@ -1,34 +1,28 @@
 #include "indentsim/contact.hpp"
 
+#include "indentsim/layer_forces.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
 namespace indentsim {
 
-double CylindricalPunch::surface_height(double x) const {
-  const double ax = std::abs(x);
-  if (ax >= radius) return std::numeric_limits<double>::infinity();
-  // R - sqrt(R^2 - x^2) written without cancellation for x << R.
-  return ax * ax / (radius + std::sqrt((radius - ax) * (radius + ax)));
-}
-
-ContactBoundary::ContactBoundary(const Mesh& mesh, const CylindricalPunch& punch,
+ContactBoundary::ContactBoundary(const Mesh& mesh, std::shared_ptr<const PunchShape> punch,
                                  const StiffnessPattern& pattern, const std::vector<double>& stiffness_values)
-    : punch_(punch) {
+    : punch_(std::move(punch)), symmetry_factor_(mesh.kinematics().symmetry_factor()) {
   const int j = mesh.top_row();
   for (int i = 0; i < mesh.nodes_x(); ++i) {
     const double x = mesh.x(i);
-    if (x >= punch.radius) break;
+    const double g = punch_->surface_height(x);
+    if (!std::isfinite(g)) break;  // beyond the punch's rim: never touched
     ContactCandidate c;
     c.node = mesh.node(i, j);
     c.equation = mesh.equation(Mesh::dof_v(c.node));
     c.x = x;
-    c.surface_height = punch.surface_height(x);
+    c.surface_height = g;
     c.scale = stiffness_values[pattern.diagonal_position(c.equation)];
-    const double left = i > 0 ? 0.5 * (x - mesh.x(i - 1)) : 0.0;
-    const double right = i + 1 < mesh.nodes_x() ? 0.5 * (mesh.x(i + 1) - x) : 0.0;
-    c.tributary_width = left + right;
+    c.tributary_measure = tributary_measure(mesh, i);
     candidates_.push_back(c);
   }
 }
@@ -44,8 +38,8 @@ ContactResult evaluate_contact(const ContactBoundary& boundary, const double* u,
     const double fk = internal_force[cs[k].equation];
     const bool on = ContactBoundary::active(cs[k], fk, u[cs[k].equation], alpha);
     r.in_contact[k] = on;
-    // docs/MODEL.md §3: P is twice the sum of the vertical reactions of all contact nodes of the half
-    // model, the axis node included.  Open nodes carry no force (their residual is the
+    // docs/MODEL.md §3: P is the sum of the vertical reactions of all contact nodes, the axis node
+    // included, times the symmetry factor (twice, for the half model of plane strain).  Open nodes carry no force (their residual is the
     // equilibrium residual itself), so summing -r_k over contact nodes is the reaction.
     if (on) {
       r.nodal_force[k] = -fk;
@@ -54,7 +48,7 @@ ContactResult evaluate_contact(const ContactBoundary& boundary, const double* u,
       r.outermost = static_cast<int>(k);
     }
   }
-  r.force = 2.0 * half_model_force;
+  r.force = boundary.symmetry_factor() * half_model_force;
   return r;
 }
 
@@ -64,7 +58,7 @@ double contact_half_width(const ContactBoundary& boundary, const ContactResult& 
   // No force, no contact zone: at alpha = 0 the punch touches the axis node only.
   if (n < 0 || !(contact.force > 0.0)) return 0.0;
   const double x_n = cs[n].x;
-  if (n + 1 >= static_cast<int>(cs.size())) return x_n;
+  if (n + 1 >= static_cast<int>(cs.size())) return x_n;  // the rim node of a flat punch touches
   const double x_open = cs[n + 1].x;
 
   // Least squares of p^2 = A + B x^2 over the contact nodes just inside the edge.  The pressure
@@ -72,13 +66,13 @@ double contact_half_width(const ContactBoundary& boundary, const ContactResult& 
   // in any units (p^2 of a pressure in pascals overflows for E near 1e160 and underflows for small E).
   double p_scale = 0.0;
   for (int k = std::max(0, n - 5); k < n; ++k)
-    if (contact.in_contact[k] && cs[k].tributary_width > 0.0)
-      p_scale = std::max(p_scale, std::abs(contact.nodal_force[k] / cs[k].tributary_width));
+    if (contact.in_contact[k] && cs[k].tributary_measure > 0.0)
+      p_scale = std::max(p_scale, std::abs(contact.nodal_force[k] / cs[k].tributary_measure));
   double s1 = 0, sx = 0, sxx = 0, sy = 0, sxy = 0;
   int used = 0;
   for (int k = std::max(0, n - 5); k < n; ++k) {
-    if (!contact.in_contact[k] || !(cs[k].tributary_width > 0.0) || !(p_scale > 0.0)) continue;
-    const double p = contact.nodal_force[k] / cs[k].tributary_width / p_scale;
+    if (!contact.in_contact[k] || !(cs[k].tributary_measure > 0.0) || !(p_scale > 0.0)) continue;
+    const double p = contact.nodal_force[k] / cs[k].tributary_measure / p_scale;
     const double x2 = cs[k].x * cs[k].x, p2 = p * p;
     s1 += 1;
     sx += x2;

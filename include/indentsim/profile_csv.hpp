@@ -1,0 +1,17 @@
+#pragma once
+// A measured tip profile from a CSV file: rows r, g(r) in metres, an optional header row.
+// Read with libcsv (RFC 4180 quoting, any line ending); the shape checks (r from 0 increasing,
+// g not decreasing) are validate()'s, which names the point.
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace indentsim {
+
+/// The (r, g) rows of `file`; throws InputError(source, key, ...) naming the file and the row
+/// when it cannot be read or a row is not two numbers.
+std::vector<std::pair<double, double>> read_profile_csv(const std::filesystem::path& file, const std::string& source,
+                                                        const std::string& key);
+
+}  // namespace indentsim
