@@ -7,10 +7,11 @@ Reads OUTDIR/case.toml, curve.csv, summary.json, profiles.csv and the VTU of one
 fields.pvd -- by default the deepest state of the load path, which indentsim always writes (a
 history that ends unloaded has nothing to show at its end) -- and writes PNG and SVG files into
 OUTDIR/figures/:
-  curve          the P-alpha curve, loading and unloading branches in their own colours, the peak,
-                 the unloading stiffness S as a tangent and the residual depth h_f marked (elastic
-                 runs: also the P-a relation against Hertz line contact)
-  pressure       the contact pressure from the layer forces against Hertz for the same force
+  curve          the P-alpha curve (P in kN/m in plane strain, in N in axisymmetry), loading and
+                 unloading branches in their own colours, the peak, the unloading stiffness S as a
+                 tangent and the residual depth h_f marked (elastic runs: also the P-a relation
+                 against Hertz line contact, Hertz for a sphere, Sneddon for a cone)
+  pressure       the contact pressure from the layer forces against that theory for the same force
   profiles       sigma_N and sigma_T along the surface and the chosen depths (the paper's Fig. 5):
                  lines from the local stiffness rows, markers from Gauss-point stresses
   plastic_zone   strain intensity e_u / e0 on the deformed mesh, the outline of the yielded region
@@ -46,8 +47,61 @@ def save(fig, outdir, name):
     print(f"wrote {outdir / name}.png")
 
 
-def hertz_force(a, radius, e_star):
-    return math.pi * e_star * a * a / (4 * radius)
+class Scene:
+    """What the figures need of the scene: the unit of P and the theory of the punch's shape.
+
+    Plane strain: P per unit thickness [kN/m], Hertz line contact for the cylinder.  Axisymmetry:
+    P in newtons, Hertz for the sphere, Sneddon for the cone and the flat punch.  Other shapes
+    have no closed form: their figures show indentsim alone."""
+
+    def __init__(self, case):
+        self.axisymmetric = case["geometry"].get("kind", "plane_strain") == "axisymmetric"
+        self.punch = case["punch"]
+        self.shape = self.punch.get("shape", "sphere")
+        self.e_star = case["material"]["E"] / (1 - case["material"]["nu"] ** 2)
+        self.force_scale, self.force_unit = (1.0, "N") if self.axisymmetric else (1e3, "kN/m")
+        self.stiffness_unit = "N/m" if self.axisymmetric else "N/m per m"
+        self.width_name = "contact radius a" if self.axisymmetric else "contact half-width a"
+        cot = 1 / math.tan(math.radians(self.punch.get("half_angle", 45.0)))
+        sharp_cone = self.shape == "cone" and self.punch.get("tip_radius", 0.0) == 0.0
+        r = self.punch.get("radius", 0.0)
+        # (name, P(a), a(P), p(x; a, P)) of the theory for this scene, or None.
+        if self.shape == "sphere" and not self.axisymmetric:
+            self.theory = ("Hertz line contact", lambda a: math.pi * self.e_star * a * a / (4 * r),
+                           lambda p: math.sqrt(4 * p * r / (math.pi * self.e_star)),
+                           lambda x, a, p: 2 * p / (math.pi * a) * math.sqrt(max(0.0, 1 - (x / a) ** 2)))
+        elif self.shape == "sphere":
+            self.theory = ("Hertz", lambda a: 4 * self.e_star * a**3 / (3 * r),
+                           lambda p: (3 * p * r / (4 * self.e_star)) ** (1 / 3),
+                           lambda x, a, p: 3 * p / (2 * math.pi * a * a) * math.sqrt(max(0.0, 1 - (x / a) ** 2)))
+        elif sharp_cone and self.axisymmetric:
+            self.theory = ("Sneddon", lambda a: math.pi * a * a * self.e_star * cot / 2,
+                           lambda p: math.sqrt(2 * p / (math.pi * self.e_star * cot)),
+                           lambda x, a, p: self.e_star * cot / 2 * math.acosh(a / x) if 0 < x < a else 0.0)
+        else:
+            self.theory = None
+
+    def force(self, value):
+        return float(value) / self.force_scale
+
+    def punch_height(self, x):
+        """g(x) of the punch, or None beyond its rim."""
+        if self.shape == "sphere":
+            r = self.punch["radius"]
+            return r - math.sqrt(r * r - x * x) if x < r else None
+        if self.shape == "flat":
+            return 0.0 if x <= self.punch["radius"] else None
+        if self.shape == "cone":
+            theta, tip = math.radians(self.punch["half_angle"]), self.punch.get("tip_radius", 0.0)
+            cap = tip * math.cos(theta)
+            if x < cap:
+                return tip - math.sqrt(tip * tip - x * x)
+            return tip - math.sqrt(tip * tip - cap * cap) + (x - cap) / math.tan(theta)
+        points = self.punch["profile_points"]
+        for (r0, g0), (r1, g1) in zip(points, points[1:]):
+            if r0 <= x <= r1:
+                return g0 + (g1 - g0) * (x - r0) / (r1 - r0)
+        return None
 
 
 def case_name(case_text):
@@ -70,7 +124,8 @@ def branches(curve):
 
 
 def plot_curve(case, name, curve, summary, outdir):
-    elastic = case["material"]["model"] == "elastic"
+    scene = Scene(case)
+    elastic = case["material"]["model"] == "elastic" and scene.theory is not None
     fig, axes = plt.subplots(1, 2 if elastic else 1, figsize=(11 if elastic else 6, 4.4), squeeze=False)
     ax = axes[0][0]
     drawn = set()
@@ -78,36 +133,35 @@ def plot_curve(case, name, curve, summary, outdir):
     for k, (loading, rows) in enumerate(branches(curve)):
         label = "unloading" if not loading else ("loading" if k == 0 else "reloading")
         color, line, order = style[label]
-        ax.plot([float(r["alpha"]) * 1e6 for r in rows], [float(r["P"]) / 1e3 for r in rows], "o", ls=line, ms=3,
+        ax.plot([float(r["alpha"]) * 1e6 for r in rows], [scene.force(r["P"]) for r in rows], "o", ls=line, ms=3,
                 color=color, zorder=order, label=None if label in drawn else label)
         drawn.add(label)
     peak = max(curve, key=lambda r: float(r["P"]))
-    ax.plot(float(peak["alpha"]) * 1e6, float(peak["P"]) / 1e3, "k*", ms=10, label="peak")
+    ax.plot(float(peak["alpha"]) * 1e6, scene.force(peak["P"]), "k*", ms=10, label="peak")
     for u in summary.get("unloading", []):
         h, p, stiffness = u["depth"], u["force"], u["stiffness"]
         if stiffness > 0:
             h0 = h - p / stiffness  # where the tangent at the reversal meets P = 0
-            ax.plot([h0 * 1e6, h * 1e6], [0, p / 1e3], "k--", lw=0.8, label=f"S = {stiffness:.3g} N/m per m")
+            ax.plot([h0 * 1e6, h * 1e6], [0, scene.force(p)], "k--", lw=0.8,
+                    label=f"S = {stiffness:.3g} {scene.stiffness_unit}")
         if u.get("separated") and u.get("residual_depth") is not None:
             ax.plot(u["residual_depth"] * 1e6, 0, "rv", ms=8, label=f"h_f = {u['residual_depth'] * 1e6:.3g} µm")
     ax.set_xlabel("indentation depth α [µm]")
-    ax.set_ylabel("punch force P [kN/m]")
-    ax.set_title(f"{name}: P–α ({case['material']['model']})")
+    ax.set_ylabel(f"punch force P [{scene.force_unit}]")
+    ax.set_title(f"{name}: P–α ({case['material']['model']}, {scene.shape})")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
     if elastic:
-        e_star = case["material"]["E"] / (1 - case["material"]["nu"] ** 2)
-        radius = case["punch"]["radius"]
+        theory_name, force_of_a = scene.theory[0], scene.theory[1]
         ax = axes[0][1]
         a_max = max(float(r["a"]) for r in curve)
         a_line = [a_max * k / 100 for k in range(101)]
-        ax.plot([a * 1e6 for a in a_line], [hertz_force(a, radius, e_star) / 1e3 for a in a_line], "-",
-                label="Hertz line contact")
-        ax.plot([float(r["a"]) * 1e6 for r in curve], [float(r["P"]) / 1e3 for r in curve], "o", ms=4,
+        ax.plot([a * 1e6 for a in a_line], [force_of_a(a) / scene.force_scale for a in a_line], "-", label=theory_name)
+        ax.plot([float(r["a"]) * 1e6 for r in curve], [scene.force(r["P"]) for r in curve], "o", ms=4,
                 label="indentsim")
-        ax.set_xlabel("contact half-width a [µm]")
-        ax.set_ylabel("punch force P [kN/m]")
-        ax.set_title(f"{name}: P–a against Hertz")
+        ax.set_xlabel(f"{scene.width_name} [µm]")
+        ax.set_ylabel(f"punch force P [{scene.force_unit}]")
+        ax.set_title(f"{name}: P–a against {theory_name}")
         ax.legend()
         ax.grid(alpha=0.3)
     save(fig, outdir, "curve")
@@ -122,18 +176,16 @@ def plot_pressure(case, name, row, profiles, surface_from_vtu, outdir):
         source = "layer forces"
     else:
         surface, source = surface_from_vtu, "nodal contact pressure"
-    e_star = case["material"]["E"] / (1 - case["material"]["nu"] ** 2)
-    radius = case["punch"]["radius"]
+    scene = Scene(case)
     fig, ax = plt.subplots(figsize=(5.5, 4.2))
     shown = [(x, p) for x, p in surface if x <= 1.6 * max(a, 1e-300)]
     ax.plot([x * 1e6 for x, _ in shown], [p / 1e6 for _, p in shown], "o", ms=4, label=f"indentsim ({source})")
-    if force > 0:
-        a_h = math.sqrt(4 * force * radius / (math.pi * e_star))
-        p0 = 2 * force / (math.pi * a_h)
-        grid = [a_h * k / 200 for k in range(201)]
-        ax.plot([x * 1e6 for x in grid], [p0 * math.sqrt(max(0.0, 1 - (x / a_h) ** 2)) / 1e6 for x in grid], "-",
-                label="Hertz, same P")
-    ax.set_xlabel("x [µm]")
+    if force > 0 and scene.theory is not None and case["material"]["model"] == "elastic":
+        theory_name, _, a_of_force, pressure = scene.theory
+        a_t = a_of_force(force)
+        grid = [a_t * k / 200 for k in range(1, 201)]
+        ax.plot([x * 1e6 for x in grid], [pressure(x, a_t, force) / 1e6 for x in grid], "-", label=f"{theory_name}, same P")
+    ax.set_xlabel("r [µm]" if scene.axisymmetric else "x [µm]")
     ax.set_ylabel("contact pressure p [MPa]")
     ax.set_title(f"{name}: contact pressure at α = {float(row['alpha']) * 1e6:.3g} µm (step {row['step']})")
     ax.legend()
@@ -226,16 +278,16 @@ def plot_plastic_zone(case, name, row, fields, outdir):
     for k, (n1, n2) in enumerate(outline):
         ax.plot([deformed[n1][0] * 1e3, deformed[n2][0] * 1e3], [deformed[n1][1] * 1e3, deformed[n2][1] * 1e3], "w-",
                 lw=1.2, label="yielded region" if k == 0 else None)
-    radius = case["punch"]["radius"]
+    scene = Scene(case)
     alpha = float(row["alpha"])
-    xs = [window * k / 200 for k in range(201) if window * k / 200 < radius]
-    ax.plot([x * 1e3 for x in xs], [(-alpha + radius - math.sqrt(radius**2 - x**2)) * 1e3 for x in xs], "r-",
-            lw=1.5, label="punch")
+    outline_xs = [window * k / 200 for k in range(201)]
+    punch = [(x, scene.punch_height(x)) for x in outline_xs if scene.punch_height(x) is not None]
+    ax.plot([x * 1e3 for x, _ in punch], [(g - alpha) * 1e3 for _, g in punch], "r-", lw=1.5, label="punch")
     ax.set_xlim(0, window * 1e3)
     ax.set_ylim(-window * 1e3, 0.15 * window * 1e3)
     ax.set_aspect("equal")
-    ax.set_xlabel("x [mm] (deformed)")
-    ax.set_ylabel("y [mm] (deformed)")
+    ax.set_xlabel(("r" if scene.axisymmetric else "x") + " [mm] (deformed)")
+    ax.set_ylabel(("z" if scene.axisymmetric else "y") + " [mm] (deformed)")
     count = int(sum(1 for f in fields["plastic"] if f > 0))
     ax.set_title(f"{name}: α = {alpha * 1e6:.3g} µm, {count} yielded elements")
     ax.legend(loc="lower right", fontsize=7)
