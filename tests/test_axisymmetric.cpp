@@ -23,15 +23,6 @@ using indentsim::testing::source_path;
 
 namespace {
 
-Mesh graded_cylinder(double radius, double height, ElementKind kind) {
-  const auto depth = graded_axis(height, 1e-3, 2e-4, 1.25);
-  std::vector<double> y(depth.size());
-  for (std::size_t k = 0; k < depth.size(); ++k) y[k] = -depth[depth.size() - 1 - k];
-  Mesh mesh(graded_axis(radius, 2e-3, 2.5e-4, 1.3), y);
-  mesh.set_element_kind(kind);
-  mesh.set_scene(SceneKind::axisymmetric);
-  return mesh;
-}
 
 /// The final row's (alpha, P, a) of a run of `lc`.
 struct FinalState {
@@ -56,7 +47,7 @@ TEST_P(AxisymmetricPatch, UniformCompressionIsExact) {
   // constant stress with sigma_rr = sigma_hoop is in equilibrium: d(r sigma_rr)/dr = sigma_hoop)
   // and equal the consistent ring tractions on the top and the outer side.
   const double radius = 15e-3, height = 10e-3, c = -4e-4, d = -1e-3;
-  const Mesh mesh = graded_cylinder(radius, height, GetParam());
+  const Mesh mesh = indentsim::testing::graded_block(radius, height, GetParam(), SceneKind::axisymmetric);
   const ElasticMaterial material{210e9, 0.3};
   const StiffnessPattern pattern(mesh);
   const ElasticStiffness stiffness(mesh, material, pattern);

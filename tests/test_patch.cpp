@@ -6,6 +6,7 @@
 
 #include "indentsim/assembly.hpp"
 #include "indentsim/mesh.hpp"
+#include "test_support.hpp"
 #include "indentsim/solver.hpp"
 
 using namespace indentsim;
@@ -32,15 +33,6 @@ private:
   std::vector<double> load_;
 };
 
-// A lx x ly block graded towards the loaded corner, of the given element kind.
-Mesh graded_block(double lx, double ly, ElementKind kind) {
-  const auto depth = graded_axis(ly, 1e-3, 2e-4, 1.25);
-  std::vector<double> y(depth.size());
-  for (std::size_t k = 0; k < depth.size(); ++k) y[k] = -depth[depth.size() - 1 - k];
-  Mesh mesh(graded_axis(lx, 2e-3, 2.5e-4, 1.3), y);
-  mesh.set_element_kind(kind);
-  return mesh;
-}
 
 }  // namespace
 
@@ -50,7 +42,7 @@ TEST_P(PatchTest, UniformCompressionIsReproducedExactlyOnAGradedMesh) {
   // u1 = 0, u2 = -eps (y + ly): satisfies the base clamp and the axis symmetry condition.
   // Stresses: sigma22 = -(lambda + 2 mu) eps on top, sigma11 = -lambda eps on the side x = lx.
   const double lx = 15e-3, ly = 10e-3, eps = 1e-3;
-  Mesh mesh = graded_block(lx, ly, GetParam());
+  Mesh mesh = indentsim::testing::graded_block(lx, ly, GetParam());
   const ElasticMaterial material{210e9, 0.3};
   const LameConstants lame = material.lame();
   const StiffnessPattern pattern(mesh);
@@ -105,7 +97,7 @@ TEST_P(PatchTest, EveryConstantStrainStateIsExactOnAGradedMesh) {
   // constant strain, and the assembled element forces vanish at every interior node (constant
   // stress is in equilibrium) and equal the consistent tractions on the boundary.
   const double lx = 15e-3, ly = 10e-3, e = 1e-3;
-  Mesh mesh = graded_block(lx, ly, GetParam());
+  Mesh mesh = indentsim::testing::graded_block(lx, ly, GetParam());
   const ElasticMaterial material{210e9, 0.3};
   const StiffnessPattern pattern(mesh);
   ElasticStiffness stiffness(mesh, material, pattern);

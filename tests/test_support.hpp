@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include "indentsim/load_case.hpp"
+#include "indentsim/mesh.hpp"
 
 namespace indentsim::testing {
 
@@ -100,6 +101,17 @@ inline std::string source_path(const std::string& relative) { return std::string
 
 inline LoadCase shipped_case(const std::string& name, const std::vector<std::string>& overrides = {}) {
   return read_load_case(source_path("loadcases/" + name), overrides);
+}
+
+/// A lx x ly block (or cylinder) graded towards the loaded corner, of the given element kind and scene.
+inline Mesh graded_block(double lx, double ly, ElementKind kind, SceneKind scene = SceneKind::plane_strain) {
+  const auto depth = graded_axis(ly, 1e-3, 2e-4, 1.25);
+  std::vector<double> y(depth.size());
+  for (std::size_t k = 0; k < depth.size(); ++k) y[k] = -depth[depth.size() - 1 - k];
+  Mesh mesh(graded_axis(lx, 2e-3, 2.5e-4, 1.3), y);
+  mesh.set_element_kind(kind);
+  mesh.set_scene(scene);
+  return mesh;
 }
 
 }  // namespace indentsim::testing
