@@ -28,14 +28,6 @@ class Hostile : public indentsim::testing::CliTest {
 protected:
   const std::string elastic = source_path("loadcases/elastic.toml");
   const std::string small = " --quiet --set mesh.contact_nodes=6 --set load.increments=4";
-  // Runs `args`; expects exit 2 with `key` named and nothing written to `out`.
-  void expect_refused(const std::string& args, const std::string& key) {
-    SCOPED_TRACE(args);
-    const fs::path out = dir_ / "never";
-    EXPECT_EQ(cli(args + " --out " + out.string()), 2) << err();
-    EXPECT_NE(err().find(key), std::string::npos) << err();
-    EXPECT_FALSE(fs::exists(out));
-  }
 };
 
 // A run's checkpoint rewritten with `edit` applied and its checksum recomputed.

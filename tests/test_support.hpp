@@ -95,6 +95,14 @@ protected:
   }
   std::string out() const { return slurp(dir_ / "out.txt"); }
   std::string err() const { return slurp(dir_ / "err.txt"); }
+  /// Bad input: exit 2, the message names the key, and the output folder is never created.
+  void expect_refused(const std::string& args, const std::string& key) {
+    SCOPED_TRACE(args);
+    const std::filesystem::path never = dir_ / "never";
+    EXPECT_EQ(cli(args + " --quiet --out " + never.string()), 2) << err();
+    EXPECT_NE(err().find(key), std::string::npos) << err();
+    EXPECT_FALSE(std::filesystem::exists(never));
+  }
 };
 
 inline std::string source_path(const std::string& relative) { return std::string(INDENTSIM_SOURCE_DIR) + "/" + relative; }

@@ -55,9 +55,13 @@ struct LoadInput {
 
 enum class ElementChoice { automatic, q1, bbar };
 
+/// The default mesh.contact_nodes under a cone (load_case.cpp says why).
+inline constexpr int cone_contact_nodes = 30;
+
 struct MeshInput {
   ElementChoice element = ElementChoice::automatic;  ///< "auto" | "q1" | "bbar"
   int contact_nodes = 20;  ///< fine-zone elements across the estimated final contact half-width
+                           ///< (cone_contact_nodes when the key is absent and the punch is a cone)
   std::optional<double> contact_half_width;  ///< override of the estimate a* [m]
   std::optional<double> fine_width;          ///< override: width of the uniform zone [m]
   std::optional<double> fine_depth;          ///< override: depth of the uniform zone [m]

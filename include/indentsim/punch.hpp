@@ -45,7 +45,7 @@ public:
   /// not a theorem).  Never beyond the geometric radius.
   virtual double contact_estimate(SceneKind scene, double alpha, double block_depth, double nu) const;
   /// A warning when the depth pushes the small-slope model (vertical gap) beyond its range.
-  virtual std::optional<std::string> slope_warning(double alpha) const { return std::nullopt; }
+  virtual std::optional<std::string> slope_warning(double /*alpha*/) const { return std::nullopt; }
 };
 
 class SphericalPunch final : public PunchShape {

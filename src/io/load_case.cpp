@@ -424,6 +424,11 @@ LoadCase from_table(const toml::table& root, const std::string& source, const st
     lc.material.e0 = e0_of_yield_stress(*lc.material.yield_stress, lc.material.E, lc.material.nu);
   }
   check_punch_keys(r, lc);
+  // A cone has no length scale: its contact edge sweeps the whole contact zone node by node, and
+  // under a plastic material the edge carries the full hardness, so the node-by-node engagement is
+  // a first-order error.  30 elements hold Kick's law P/h^2 = const to 0.34% (README, "Kick's law").
+  if (lc.punch.shape == PunchShapeKind::cone && !r.find("mesh", "contact_nodes"))
+    lc.mesh.contact_nodes = cone_contact_nodes;
   validate(lc);
   return lc;
 }
@@ -603,11 +608,11 @@ const std::vector<KeyDeclaration>& key_declarations() {
     }
     k.push_back(choice_key({"mesh", "element", "choice", "", "",
                             "q1 (the paper's exact element), bbar (mean dilatation, locking-free), auto (B-bar when "
-                            "nu >= 0.45 or kappa > 0.95 or n < 0.1)"},
+                            "nu >= 0.45 or kappa > 0.95 or n < 0.1, or a plastic material under a cone)"},
                            element_names, [](auto& c) -> auto& { return c.mesh.element; }));
     k.push_back(integer_key({"mesh", "contact_nodes", "integer", ">= 2", "",
                              "fine-zone elements across the estimated final contact half-width (raise it to buy "
-                             "accuracy)"},
+                             "accuracy); 30 under a cone"},
                             [](auto& c) -> auto& { return c.mesh.contact_nodes; }));
     k.push_back(optional_number_key({"mesh", "contact_half_width", "number", "> 0", "m",
                                      "override of the estimate a* that sizes the mesh (default: Hertz, or a pilot run)"},
