@@ -21,6 +21,9 @@ LABELS = {
     "deep_plastic": "deep plastic, Ilyushin (vs Richardson)",
     "deep_plastic_klu": "deep plastic with KLU only",
     "deep_plastic_increments": "deep plastic, 2–16 increments at contact_nodes 16",
+    "axi_elastic_sphere": "axisymmetric elastic sphere (vs Richardson)",
+    "axi_steel_sphere": "axisymmetric steel sphere, J2 (vs Richardson)",
+    "axi_cone": "axisymmetric Berkovich cone, Ilyushin (vs Richardson)",
 }
 
 
