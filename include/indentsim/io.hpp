@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "indentsim/fields.hpp"
+#include "indentsim/indentation_analysis.hpp"
 #include "indentsim/file_system.hpp"
 #include "indentsim/load_stepping.hpp"
 #include "indentsim/phase_times.hpp"
@@ -38,10 +39,14 @@ std::string to_string(RunStatus status);
 class Simulation;
 
 /// What indentation users read off a load history (DIR/summary.json): the peak, and for every
-/// unloading branch the unloading stiffness S = dP/dalpha at its start and the residual depth
-/// where the punch leaves the surface.
+/// unloading branch the unloading stiffness S = dP/dalpha at its start, the residual depth
+/// where the punch leaves the surface, and its Oliver-Pharr analysis next to the true contact
+/// (indentation_analysis.hpp).
 class LoadHistorySummary {
 public:
+  /// `load_case` gives the indenter, the scene and the analysis settings (none: no analysis).
+  explicit LoadHistorySummary(const LoadCase* load_case = nullptr);
+
   struct Unloading {
     int step = 0;                       ///< the increment where unloading starts (the reversal)
     double depth = 0.0, force = 0.0;    ///< state at the reversal
@@ -54,6 +59,8 @@ public:
 
   /// Feed every converged increment in order, with Simulation::free_surface_depth() at it.
   void add(const IncrementRecord& record, double free_surface_depth);
+  /// The live state's exact unloading stiffness and contact radius at a peak `step`.
+  void set_true_contact(int step, const TrueContact& truth);
   /// `run_fields`: JSON members (each line ending with a comma) about the run itself.
   std::string json(const std::string& run_fields, RunStatus status, const std::string& message,
                    const PhaseTimes& times = PhaseTimes{}) const;
@@ -64,6 +71,11 @@ public:
 private:
   std::optional<IncrementRecord> previous_, before_previous_;  // the last two rows fed
   std::vector<Unloading> unloadings_;
+  std::shared_ptr<const PunchShape> punch_;  // the indenter's area function (null: no analysis)
+  AnalysisContext context_;
+  std::vector<double> depths_, forces_;
+  std::vector<int> steps_;
+  std::vector<std::pair<int, TrueContact>> truths_;
   double peak_depth_ = 0.0, peak_force_ = 0.0;
   bool unloading_ = false;
 };
@@ -83,6 +95,11 @@ public:
   RunOutput(const std::filesystem::path& dir, const LoadCase& load_case,
             const std::vector<IncrementRecord>& replay_curve = {}, const std::vector<double>& replay_depths = {});
   void increment(const Simulation& sim, const IncrementRecord& record);
+  /// A resumed run's live state, restored at the last replayed increment: a peak's exact
+  /// unloading stiffness is taken from it when the run resumes exactly there.
+  void resumed(const Simulation& sim) {
+    if (!records_.empty()) record_true_contact(sim, records_.back().step);
+  }
   /// Writes the final state's fields, the layer view and summary.json with `status` (not
   /// "failed": use fail()).
   void finish(const Simulation& sim, RunStatus status, const std::string& message = "",
@@ -96,6 +113,8 @@ public:
 
 private:
   void write_fields(const Simulation& sim, int step);
+  /// At a peak of the load path: the exact unloading stiffness and the true contact radius.
+  void record_true_contact(const Simulation& sim, int step);
   /// The layer view of the simulation's current state: {layers.csv rows, profiles.csv rows}.
   std::pair<std::string, std::string> layer_tables(const Simulation& sim, int step, bool header) const;
 
@@ -111,6 +130,7 @@ private:
   int last_step_ = -1, last_fields_step_ = -1;
   double deepest_depth_ = 0.0;  ///< the load path's deepest waypoint
   int peak_step_ = -1;          ///< the increment that reached it (its fields and tables are kept)
+  std::vector<int> peak_steps_;  ///< the planned increments where the path turns from loading to unloading
   std::pair<std::string, std::string> peak_tables_;
 };
 

@@ -91,6 +91,16 @@ struct SolverInput {
   int max_cutbacks = 10;     ///< halvings of one increment before the run stops
 };
 
+/// How load-unload curves are analysed (indentation_analysis.hpp): Oliver-Pharr's constants and
+/// the indenter's elasticity.  They do not change the simulation.
+struct AnalysisInput {
+  std::vector<double> fit_range{0.2, 0.98};  ///< unloading fit over these fractions of P_max
+  std::optional<double> epsilon;             ///< h_c = h_max - epsilon P_max / S (default by shape)
+  double beta = 1.0;                         ///< E_r = sqrt(pi) / (2 beta) S / sqrt(A) (1.034: Berkovich)
+  std::optional<double> indenter_E;          ///< [Pa]; none: a rigid indenter
+  double indenter_nu = 0.07;                 ///< diamond
+};
+
 struct LoadCase {
   std::string source = "<defaults>";  ///< file it was read from, for messages
   GeometryInput geometry;
@@ -100,6 +110,7 @@ struct LoadCase {
   MeshInput mesh;
   OutputInput output;
   SolverInput solver;
+  AnalysisInput analysis;
 
   double max_depth() const;
 };

@@ -88,6 +88,8 @@ public:
   const std::vector<double>& displacement() const { return u_; }
   ContactResult contact() const;
   double contact_half_width() const;
+  /// The exact unloading stiffness -dP/d(alpha) at the current state (unloading_stiffness.hpp).
+  double unloading_stiffness() const;
   /// The depth at which the punch would first touch the current surface, max_k (-v_k - g(x_k)):
   /// after separation, the residual depth of the imprint where the punch left it.
   double free_surface_depth() const;

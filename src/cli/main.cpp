@@ -278,6 +278,7 @@ int command_resume(const std::string& argument, const std::vector<std::string>& 
   if (!quiet) fmt::print("resuming {} after increment {} (alpha = {:.6g} m)\n", file.string(), step, checkpoint.state.alpha);
   folder.clear_earlier_run(in_place ? std::optional<int>(step) : std::nullopt);
   RunOutput output(folder.dir(), run.load_case, checkpoint.curve, checkpoint.free_surface_depths);
+  output.resumed(*run.simulation);
   return drive(*run.simulation, output, file.string(), quiet);
 }
 

@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include "indentsim/punch.hpp"
 #include "indentsim/simulation.hpp"
 #include "indentsim/version.hpp"
 
@@ -74,7 +75,29 @@ std::string CurveWriter::format(const IncrementRecord& r) {
 
 void CurveWriter::write(const IncrementRecord& record) { file_.append(format(record) + "\n"); }
 
+LoadHistorySummary::LoadHistorySummary(const LoadCase* load_case) {
+  if (!load_case) return;
+  punch_ = make_punch(load_case->punch);
+  context_.scene = load_case->geometry.kind;
+  context_.punch = punch_.get();
+  context_.shape = load_case->punch.shape;
+  context_.settings = load_case->analysis;
+  context_.specimen_nu = load_case->material.nu;
+}
+
+void LoadHistorySummary::set_true_contact(int step, const TrueContact& truth) {
+  for (auto& [s, t] : truths_)
+    if (s == step) {
+      t = truth;
+      return;
+    }
+  truths_.emplace_back(step, truth);
+}
+
 void LoadHistorySummary::add(const IncrementRecord& r, double free_surface_depth) {
+  depths_.push_back(r.alpha);
+  forces_.push_back(r.force);
+  steps_.push_back(r.step);
   if (r.force > peak_force_) peak_force_ = r.force;
   peak_depth_ = std::max(peak_depth_, r.alpha);
   if (previous_) {
@@ -131,6 +154,21 @@ std::string LoadHistorySummary::json(const std::string& run_fields, RunStatus st
                        u.separated ? "true" : "false",
                        u.separated ? fmt::format("{:.17g}", u.residual_depth) : std::string("null"),
                        u.separated ? std::to_string(u.separation_step) : std::string("null"));
+    if (punch_) {
+      // The Oliver-Pharr analysis of this branch, next to the true contact at its peak.
+      out.pop_back();  // the object's closing brace: the analysis goes inside it
+      std::optional<TrueContact> truth;
+      for (const auto& [s, t] : truths_)
+        if (s == u.step) truth = t;
+      try {
+        for (const CurveBranch& b : unloading_branches(depths_))
+          if (steps_[b.peak] == u.step)
+            out += ", \"analysis\": " + to_json(analyze_branch(depths_, forces_, b, context_, truth), context_, "    ");
+      } catch (const AnalysisError& e) {
+        out += ", \"analysis\": null, \"analysis_error\": " + json_string(e.what());
+      }
+      out += "}";
+    }
   }
   out += unloadings_.empty() ? "]\n}\n" : "\n  ]\n}\n";
   return out;
@@ -140,11 +178,15 @@ RunOutput::RunOutput(const std::filesystem::path& dir, const LoadCase& load_case
                      const std::vector<IncrementRecord>& replay_curve, const std::vector<double>& replay_depths)
     : dir_(dir),
       run_fields_(run_fields(load_case)),
+      summary_(&load_case),
       fields_every_(load_case.output.fields_every),
       profile_depths_(load_case.output.profile_depths),
       curve_(dir / "curve.csv"),
       fields_(dir),
       deepest_depth_(load_case.max_depth()) {
+  const std::vector<double> targets = plan_increments(load_case.load);
+  for (int k : reversal_steps(targets))
+    if (targets[static_cast<std::size_t>(k)] > targets[static_cast<std::size_t>(k) - 1]) peak_steps_.push_back(k);
   write_file_atomically(dir_ / "case.toml", to_toml(load_case));
   write_file_atomically(dir_ / "summary.json", summary_.json(run_fields_, RunStatus::running, ""));
   for (std::size_t k = 0; k < replay_curve.size(); ++k) {
@@ -174,6 +216,7 @@ void RunOutput::increment(const Simulation& sim, const IncrementRecord& record) 
   depths_.push_back(depth);
   last_step_ = record.step;
   if (fields_every_ > 0 && record.step % fields_every_ == 0) write_fields(sim, record.step);
+  record_true_contact(sim, record.step);
   // The deepest state is what figures show by default (a history may end unloaded, with nothing
   // to see): its fields are always written and its layer view kept for the tables.
   if (record.alpha == deepest_depth_ && peak_step_ < 0 && record.step > 0) {
@@ -181,6 +224,13 @@ void RunOutput::increment(const Simulation& sim, const IncrementRecord& record) 
     if (last_fields_step_ != record.step) write_fields(sim, record.step);
     peak_tables_ = layer_tables(sim, record.step, true);
   }
+}
+
+void RunOutput::record_true_contact(const Simulation& sim, int step) {
+  if (std::find(peak_steps_.begin(), peak_steps_.end(), step) == peak_steps_.end()) return;
+  const ContactResult contact = sim.contact();
+  if (contact.contact_nodes == 0) return;
+  summary_.set_true_contact(step, TrueContact{sim.unloading_stiffness(), sim.contact_half_width()});
 }
 
 std::pair<std::string, std::string> RunOutput::layer_tables(const Simulation& sim, int step, bool header) const {

@@ -653,6 +653,24 @@ const std::vector<KeyDeclaration>& key_declarations() {
       };
       k.push_back(keep);
     }
+    k.push_back(numbers_key({"analysis", "fit_range", "array of two numbers", "0 <= lower < upper <= 1", "",
+                             "the unloading fit P = B (h - h_f)^m uses the points with lower P_max <= P <= upper "
+                             "P_max (ISO 14577 practice: 20% to 98%)"},
+                            [](auto& c) -> auto& { return c.analysis.fit_range; }));
+    k.push_back(optional_number_key({"analysis", "epsilon", "number", "(0, 1]", "",
+                                     "h_c = h_max - epsilon P_max / S (default 0.75 sphere and profile, 0.72 cone, "
+                                     "1 flat)"},
+                                    [](auto& c) -> auto& { return c.analysis.epsilon; }));
+    k.push_back(number_key({"analysis", "beta", "number", "[1, 1.2]", "",
+                            "E_r = sqrt(pi) / (2 beta) S / sqrt(A_c) (1 for a body of revolution, 1.034 for a "
+                            "Berkovich pyramid)"},
+                           [](auto& c) -> auto& { return c.analysis.beta; }));
+    k.push_back(optional_number_key({"analysis", "indenter_E", "number", "> 0", "Pa",
+                                     "the indenter's Young's modulus for the specimen modulus (default: rigid; "
+                                     "diamond 1141e9)"},
+                                    [](auto& c) -> auto& { return c.analysis.indenter_E; }));
+    k.push_back(number_key({"analysis", "indenter_nu", "number", "(-1, 0.5)", "", "the indenter's Poisson's ratio"},
+                           [](auto& c) -> auto& { return c.analysis.indenter_nu; }));
     k.push_back(number_key({"solver", "tolerance", "number", "[1e-14, 1e-2)", "",
                             "residual max-norm relative to E* times the deepest depth (times 2 pi a* in axisymmetry: ring forces)"},
                            [](auto& c) -> auto& { return c.solver.tolerance; }));
@@ -807,6 +825,16 @@ void validate(const LoadCase& lc) {
   if (lc.mesh.growth && !(*lc.mesh.growth >= 1.0 && *lc.mesh.growth <= 2.0))
     fail("mesh.growth", fmt::format("must lie in [1, 2] (got {})", *lc.mesh.growth));
 
+  const auto& fit = lc.analysis.fit_range;
+  if (fit.size() != 2 || !(fit[0] >= 0.0 && fit[0] < fit[1] && fit[1] <= 1.0))
+    fail("analysis.fit_range", "must be two fractions of P_max, 0 <= lower < upper <= 1 (for example [0.2, 0.98])");
+  if (lc.analysis.epsilon && !(*lc.analysis.epsilon > 0.0 && *lc.analysis.epsilon <= 1.0))
+    fail("analysis.epsilon", fmt::format("must lie in (0, 1] (got {})", *lc.analysis.epsilon));
+  if (!(lc.analysis.beta >= 1.0 && lc.analysis.beta <= 1.2))
+    fail("analysis.beta", fmt::format("must lie in [1, 1.2] (got {})", lc.analysis.beta));
+  if (lc.analysis.indenter_E) positive("analysis.indenter_E", *lc.analysis.indenter_E);
+  if (!(lc.analysis.indenter_nu > -1.0 && lc.analysis.indenter_nu < 0.5))
+    fail("analysis.indenter_nu", fmt::format("must lie in (-1, 0.5) (got {})", lc.analysis.indenter_nu));
   if (lc.output.dir.empty()) fail("output.dir", "must not be empty");
   if (lc.output.checkpoint_every < 0)
     fail("output.checkpoint_every", fmt::format("must be >= 0 (got {})", lc.output.checkpoint_every));

@@ -1,4 +1,5 @@
 #include "indentsim/simulation.hpp"
+#include "indentsim/unloading_stiffness.hpp"
 
 #include "indentsim/interruption.hpp"
 
@@ -412,6 +413,10 @@ ContactResult Simulation::contact() const {
   std::vector<double> internal_force(u_.size());
   bulk_->internal_force(u_.data(), internal_force.data());
   return evaluate_contact(*contact_, u_.data(), internal_force.data(), alpha_);
+}
+
+double Simulation::unloading_stiffness() const {
+  return elastic_unloading_stiffness(*stiffness_, *contact_, contact());
 }
 
 double Simulation::contact_half_width() const {

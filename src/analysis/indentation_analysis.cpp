@@ -1,0 +1,260 @@
+#include "indentsim/indentation_analysis.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+#include <Eigen/Dense>
+#include <fmt/format.h>
+#include <unsupported/Eigen/NonLinearOptimization>
+
+#include "indentsim/punch.hpp"
+
+namespace indentsim {
+
+double PowerLawFit::force_at(double h) const { return h > h_f ? B * std::pow(h - h_f, m) : 0.0; }
+
+namespace {
+
+// The fit's unknowns, scaled to O(1): x = (q, m, s) with
+//   P(h) = q P_max ((h - h_f) / (h_max - h_f))^m,   h_f = h_low - (h_max - h_low) e^s,
+// so that q ~ 1, m ~ 1.2-2 and h_f stays below the lowest point fitted whatever LM tries.
+// Residuals are relative to P_max.
+struct UnloadingResidual {
+  using Scalar = double;
+  using InputType = Eigen::VectorXd;
+  using ValueType = Eigen::VectorXd;
+  using JacobianType = Eigen::MatrixXd;
+  enum { InputsAtCompileTime = Eigen::Dynamic, ValuesAtCompileTime = Eigen::Dynamic };
+
+  const std::vector<double>& h;
+  const std::vector<double>& P;
+  double P_max, h_max, h_low;
+
+  int inputs() const { return 3; }
+  int values() const { return static_cast<int>(h.size()); }
+  double residual_depth(const Eigen::VectorXd& x) const { return h_low - (h_max - h_low) * std::exp(x[2]); }
+
+  int operator()(const Eigen::VectorXd& x, Eigen::VectorXd& r) const {
+    const double h_f = residual_depth(x), span = h_max - h_f;
+    for (std::size_t i = 0; i < h.size(); ++i)
+      r[static_cast<Eigen::Index>(i)] = x[0] * std::pow((h[i] - h_f) / span, x[1]) - P[i] / P_max;
+    return 0;
+  }
+  int df(const Eigen::VectorXd& x, Eigen::MatrixXd& J) const {
+    const double h_f = residual_depth(x), span = h_max - h_f;
+    const double dhf_ds = -(h_max - h_low) * std::exp(x[2]);
+    for (std::size_t i = 0; i < h.size(); ++i) {
+      const auto k = static_cast<Eigen::Index>(i);
+      const double t = (h[i] - h_f) / span, tm = std::pow(t, x[1]);
+      J(k, 0) = tm;
+      J(k, 1) = x[0] * tm * std::log(t);
+      // dt/dh_f = (h - h_max) / span^2
+      J(k, 2) = x[0] * x[1] * std::pow(t, x[1] - 1.0) * (h[i] - h_max) / (span * span) * dhf_ds;
+    }
+    return 0;
+  }
+};
+
+}  // namespace
+
+PowerLawFit fit_unloading(const std::vector<double>& depth, const std::vector<double>& force, double lower,
+                          double upper) {
+  if (depth.size() != force.size() || depth.empty()) throw AnalysisError("an unloading branch needs points");
+  const double P_max = force.front(), h_max = depth.front();
+  if (!(P_max > 0.0)) throw AnalysisError("the unloading branch starts at a force <= 0");
+  std::vector<double> h, P;
+  for (std::size_t i = 0; i < depth.size(); ++i)
+    if (force[i] >= lower * P_max && force[i] <= upper * P_max) {
+      if (!h.empty() && !(depth[i] < h.back()))
+        throw AnalysisError(fmt::format("the depth does not decrease along the unloading branch (point {} at h = {:g} m "
+                                        "after {:g} m)",
+                                        i + 1, depth[i], h.back()));
+      h.push_back(depth[i]);
+      P.push_back(force[i]);
+    }
+  if (h.size() < 4)
+    throw AnalysisError(fmt::format("the unloading branch from h_max = {:g} m has {} point(s) with {:g}% <= P / P_max <= "
+                                    "{:g}%; the fit P = B (h - h_f)^m needs at least 4 (a longer or denser branch, "
+                                    "or a wider analysis.fit_range)",
+                                    h_max, h.size(), 100 * lower, 100 * upper));
+  const double h_low = h.back();
+  if (!(h_low < h_max)) throw AnalysisError("the unloading branch has no depth range to fit");
+  UnloadingResidual residual{h, P, P_max, h_max, h_low};
+
+  // Start from the power law through the highest and lowest points fitted, for the exponent
+  // (of a grid from flat-punch-like 1 to beyond the paraboloid's 1.5) that fits best.
+  Eigen::VectorXd best(3), r(static_cast<Eigen::Index>(h.size()));
+  double best_norm = std::numeric_limits<double>::infinity();
+  for (double m : {1.05, 1.2, 1.35, 1.5, 1.7, 2.0, 2.5, 3.0}) {
+    const double q = std::pow(P.back() / P.front(), 1.0 / m);
+    const double h_f = (h_low - q * h.front()) / (1.0 - q);
+    if (!(h_f < h_low)) continue;
+    Eigen::VectorXd x(3);
+    x << P.front() / P_max * std::pow((h_max - h_f) / (h.front() - h_f), m), m,
+        std::log((h_low - h_f) / (h_max - h_low));
+    residual(x, r);
+    if (r.norm() < best_norm) {
+      best_norm = r.norm();
+      best = x;
+    }
+  }
+  if (!std::isfinite(best_norm)) throw AnalysisError("the unloading branch does not decrease in force with depth");
+  Eigen::LevenbergMarquardt<UnloadingResidual> lm(residual);
+  lm.parameters.xtol = 1e-12;
+  lm.parameters.ftol = 1e-14;
+  lm.parameters.maxfev = 2000;
+  lm.minimize(best);
+  residual(best, r);
+
+  PowerLawFit fit;
+  fit.h_f = residual.residual_depth(best);
+  fit.m = best[1];
+  fit.h_max = h_max;
+  const double span = h_max - fit.h_f;
+  fit.B = best[0] * P_max / std::pow(span, fit.m);
+  fit.stiffness = fit.m * best[0] * P_max / span;
+  fit.points = static_cast<int>(h.size());
+  fit.rms_residual = r.norm() / std::sqrt(static_cast<double>(h.size()));
+  if (!std::isfinite(fit.stiffness) || !(fit.m > 0.0))
+    throw AnalysisError("the unloading fit did not converge to a power law");
+  return fit;
+}
+
+std::vector<CurveBranch> unloading_branches(const std::vector<double>& depth) {
+  std::vector<CurveBranch> branches;
+  std::size_t loading_start = 0;
+  std::size_t i = 0;
+  const std::size_t n = depth.size();
+  while (i + 1 < n) {
+    if (depth[i + 1] < depth[i] && (i == 0 || depth[i] > depth[i - 1])) {
+      CurveBranch b{loading_start, i, i};
+      while (b.end + 1 < n && depth[b.end + 1] < depth[b.end]) ++b.end;
+      if (b.peak > loading_start) branches.push_back(b);
+      loading_start = b.end;
+      i = b.end;
+    } else {
+      ++i;
+    }
+  }
+  return branches;
+}
+
+double contact_depth_factor(const AnalysisContext& context) {
+  if (context.settings.epsilon) return *context.settings.epsilon;
+  switch (context.shape) {
+    case PunchShapeKind::cone: return 0.72;
+    case PunchShapeKind::flat: return 1.0;
+    case PunchShapeKind::sphere:
+    case PunchShapeKind::profile: return 0.75;
+  }
+  return 0.75;
+}
+
+namespace {
+
+/// The projected contact area of radius (half-width) r: pi r^2, or the width 2 r per unit thickness.
+double projected_area(SceneKind scene, double r) {
+  return scene == SceneKind::axisymmetric ? std::numbers::pi * r * r : 2.0 * r;
+}
+
+/// int P dh over [from, to] of the curve (trapezoids), positive for either direction.
+double work(const std::vector<double>& depth, const std::vector<double>& force, std::size_t from, std::size_t to) {
+  double w = 0.0;
+  for (std::size_t k = from; k < to; ++k) w += 0.5 * (force[k] + force[k + 1]) * (depth[k + 1] - depth[k]);
+  return std::abs(w);
+}
+
+}  // namespace
+
+BranchAnalysis analyze_branch(const std::vector<double>& depth, const std::vector<double>& force,
+                              const CurveBranch& branch, const AnalysisContext& context,
+                              const std::optional<TrueContact>& truth) {
+  BranchAnalysis a;
+  a.h_max = depth[branch.peak];
+  a.P_max = force[branch.peak];
+  const std::vector<double> h(depth.begin() + static_cast<std::ptrdiff_t>(branch.peak),
+                              depth.begin() + static_cast<std::ptrdiff_t>(branch.end) + 1);
+  const std::vector<double> P(force.begin() + static_cast<std::ptrdiff_t>(branch.peak),
+                              force.begin() + static_cast<std::ptrdiff_t>(branch.end) + 1);
+  a.fit = fit_unloading(h, P, context.settings.fit_range[0], context.settings.fit_range[1]);
+  a.residual_depth = a.fit.h_f;
+  a.total_work = work(depth, force, branch.loading_start, branch.peak);
+  a.elastic_work = work(depth, force, branch.peak, branch.end);
+
+  // A flat punch's contact does not shrink on unloading: its area is the punch's, h_c = h_max.
+  a.h_c = a.h_max - contact_depth_factor(context) * a.P_max / a.fit.stiffness;
+  const auto rim = context.punch->rim();
+  a.contact_radius = rim ? *rim : (a.h_c > 0.0 ? context.punch->geometric_contact_radius(a.h_c) : 0.0);
+  a.area = projected_area(context.scene, a.contact_radius);
+  const bool axisymmetric = context.scene == SceneKind::axisymmetric;
+  if (a.area > 0.0) a.hardness = a.P_max / a.area;
+  const auto modulus = [&](double S, double area) {
+    return std::sqrt(std::numbers::pi) / (2.0 * context.settings.beta) * S / std::sqrt(area);
+  };
+  if (axisymmetric && a.area > 0.0) {
+    a.reduced_modulus = modulus(a.fit.stiffness, a.area);
+    if (context.specimen_nu) {
+      const double nu = *context.specimen_nu, nu_i = context.settings.indenter_nu;
+      const double indenter = context.settings.indenter_E ? (1.0 - nu_i * nu_i) / *context.settings.indenter_E : 0.0;
+      const double inverse = 1.0 / *a.reduced_modulus - indenter;
+      if (inverse > 0.0) a.specimen_modulus = (1.0 - nu * nu) / inverse;
+    }
+  }
+  if (truth) {
+    a.exact_stiffness = truth->stiffness;
+    a.true_contact_radius = truth->half_width;
+    a.true_area = projected_area(context.scene, truth->half_width);
+    if (*a.true_area > 0.0) {
+      a.true_hardness = a.P_max / *a.true_area;
+      if (axisymmetric) a.true_reduced_modulus = modulus(truth->stiffness.value_or(a.fit.stiffness), *a.true_area);
+      if (a.area > 0.0) a.pile_up_ratio = *a.true_area / a.area;
+    }
+  }
+  return a;
+}
+
+namespace {
+std::string number_or_null(const std::optional<double>& v) {
+  return v && std::isfinite(*v) ? fmt::format("{:.10g}", *v) : std::string("null");
+}
+}  // namespace
+
+std::string to_json(const BranchAnalysis& a, const AnalysisContext& context, const std::string& indent) {
+  const bool axisymmetric = context.scene == SceneKind::axisymmetric;
+  std::string s = "{\n";
+  const auto field = [&](const std::string& name, const std::string& value, bool last = false) {
+    s += fmt::format("{}  \"{}\": {}{}\n", indent, name, value, last ? "" : ",");
+  };
+  field("P_max", fmt::format("{:.10g}", a.P_max));
+  field("h_max", fmt::format("{:.10g}", a.h_max));
+  field("fit", fmt::format("{{\"B\": {:.10g}, \"m\": {:.10g}, \"h_f\": {:.10g}, \"points\": {}, \"range\": [{}, {}], "
+                           "\"rms_residual\": {:.3g}}}",
+                           a.fit.B, a.fit.m, a.fit.h_f, a.fit.points, context.settings.fit_range[0],
+                           context.settings.fit_range[1], a.fit.rms_residual));
+  field("S_fit", fmt::format("{:.10g}", a.fit.stiffness));
+  field("S_exact", number_or_null(a.exact_stiffness));
+  field("epsilon", fmt::format("{}", contact_depth_factor(context)));
+  field("beta", fmt::format("{}", context.settings.beta));
+  field("h_c", fmt::format("{:.10g}", a.h_c));
+  field("contact_radius", fmt::format("{:.10g}", a.contact_radius));
+  field("A_c", fmt::format("{:.10g}", a.area));
+  field("H", fmt::format("{:.10g}", a.hardness));
+  field("E_r", number_or_null(a.reduced_modulus));
+  if (!axisymmetric)
+    field("E_r_note", "\"not defined in plane strain: a half-plane's compliance depends on the specimen size\"");
+  field("E", number_or_null(a.specimen_modulus));
+  field("h_f", fmt::format("{:.10g}", a.residual_depth));
+  field("W_t", fmt::format("{:.10g}", a.total_work));
+  field("W_e", fmt::format("{:.10g}", a.elastic_work));
+  field("W_e_over_W_t", fmt::format("{:.6g}", a.total_work > 0 ? a.elastic_work / a.total_work : 0.0));
+  field("true_contact_radius", number_or_null(a.true_contact_radius));
+  field("true_area", number_or_null(a.true_area));
+  field("true_H", number_or_null(a.true_hardness));
+  field("true_E_r", number_or_null(a.true_reduced_modulus));
+  field("pile_up_ratio", number_or_null(a.pile_up_ratio), true);
+  return s + indent + "}";
+}
+
+}  // namespace indentsim

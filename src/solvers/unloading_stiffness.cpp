@@ -1,0 +1,60 @@
+#include "indentsim/unloading_stiffness.hpp"
+
+#include <stdexcept>
+#include <vector>
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+
+namespace indentsim {
+
+double elastic_unloading_stiffness(const ElasticStiffness& stiffness, const ContactBoundary& contact,
+                                   const ContactResult& state) {
+  const StiffnessPattern& pattern = stiffness.pattern();
+  const std::vector<double>& values = stiffness.values();
+  const auto n = static_cast<Eigen::Index>(pattern.size());
+  const auto& candidates = contact.candidates();
+
+  // The punch's motion: w_A = -1 on the contact nodes' vertical unknowns, 0 elsewhere.
+  std::vector<char> active(static_cast<std::size_t>(n), 0);
+  Eigen::VectorXd w_A = Eigen::VectorXd::Zero(n);
+  for (std::size_t k = 0; k < candidates.size(); ++k)
+    if (state.in_contact[k]) {
+      active[static_cast<std::size_t>(candidates[k].equation)] = 1;
+      w_A[candidates[k].equation] = -1.0;
+    }
+
+  // K with the active rows and columns replaced by the identity; their coupling moves to the
+  // right-hand side.
+  std::vector<Eigen::Triplet<double>> entries;
+  entries.reserve(values.size());
+  const auto& start = pattern.column_start();
+  const auto& row = pattern.row_index();
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n);
+  for (Eigen::Index j = 0; j < n; ++j)
+    for (std::int64_t p = start[static_cast<std::size_t>(j)]; p < start[static_cast<std::size_t>(j) + 1]; ++p) {
+      const auto i = static_cast<Eigen::Index>(row[static_cast<std::size_t>(p)]);
+      const bool row_active = active[static_cast<std::size_t>(i)], column_active = active[static_cast<std::size_t>(j)];
+      if (!row_active && !column_active) entries.emplace_back(i, j, values[static_cast<std::size_t>(p)]);
+      else if (!row_active) rhs[i] -= values[static_cast<std::size_t>(p)] * w_A[j];
+    }
+  for (Eigen::Index i = 0; i < n; ++i)
+    if (active[static_cast<std::size_t>(i)]) {
+      entries.emplace_back(i, i, 1.0);
+      rhs[i] = w_A[i];
+    }
+  Eigen::SparseMatrix<double> K(n, n);
+  K.setFromTriplets(entries.begin(), entries.end());
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> factor(K);
+  if (factor.info() != Eigen::Success) throw std::runtime_error("the elastic unloading stiffness could not be factored");
+  const Eigen::VectorXd w = factor.solve(rhs);
+
+  std::vector<double> reaction(static_cast<std::size_t>(n));
+  pattern.multiply(values, w.data(), reaction.data());
+  double rate = 0.0;  // dP/d(alpha) along w
+  for (std::size_t k = 0; k < candidates.size(); ++k)
+    if (state.in_contact[k]) rate -= reaction[static_cast<std::size_t>(candidates[k].equation)];
+  return contact.symmetry_factor() * rate;
+}
+
+}  // namespace indentsim

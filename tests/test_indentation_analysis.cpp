@@ -1,0 +1,145 @@
+// Oliver-Pharr analysis (include/indentsim/indentation_analysis.hpp): the unloading fit on
+// synthetic power laws, a branch too short to fit, the elastic sphere against Hertz (E_r = E*,
+// h_c = h_max / 2), and the pile-up ratio of elasto-plastic spheres against the literature's
+// trend (pile-up for little hardening, sink-in for strong hardening).
+#include <cmath>
+#include <iostream>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "indentsim/indentation_analysis.hpp"
+#include "indentsim/io.hpp"
+#include "indentsim/punch.hpp"
+#include "indentsim/simulation.hpp"
+#include "test_support.hpp"
+
+using namespace indentsim;
+using indentsim::testing::shipped_case;
+
+namespace {
+
+// P = B (h - h_f)^m sampled from h_max down to P = 0.1 P_max, with relative noise.
+void synthetic_branch(double B, double m, double h_f, double h_max, double noise, std::vector<double>& h,
+                      std::vector<double>& P) {
+  std::mt19937 random(12345);
+  std::normal_distribution<double> gauss(0.0, noise);
+  const double P_max = B * std::pow(h_max - h_f, m);
+  for (int k = 0; k <= 40; ++k) {
+    const double depth = h_max - (h_max - h_f) * (1.0 - std::pow(0.1, 1.0 / m)) * k / 40.0;
+    h.push_back(depth);
+    P.push_back(B * std::pow(depth - h_f, m) * (k == 0 ? 1.0 : 1.0 + gauss(random)));
+  }
+  ASSERT_NEAR(P.back() / P_max, 0.1, 1e-2);
+}
+
+double contact_modulus(const LoadCase& lc) { return lc.material.E / (1.0 - lc.material.nu * lc.material.nu); }
+
+// The summary's analysis of the run's first unloading branch, run through the library as the CLI does.
+struct AnalysedRun {
+  BranchAnalysis analysis;
+  double peak_half_width = 0.0;
+};
+AnalysedRun analyse(const LoadCase& lc) {
+  Simulation sim(lc);
+  std::vector<double> h, P;
+  std::optional<TrueContact> truth;
+  int peak_step = -1;
+  double deepest = 0.0;
+  sim.run([&](const IncrementRecord& r) {
+    h.push_back(r.alpha);
+    P.push_back(r.force);
+    if (r.alpha > deepest) {
+      deepest = r.alpha;
+      peak_step = r.step;
+      truth = TrueContact{sim.unloading_stiffness(), sim.contact_half_width()};
+    }
+  });
+  const auto punch = make_punch(lc.punch);
+  AnalysisContext context{lc.geometry.kind, punch.get(), lc.punch.shape, lc.analysis, lc.material.nu};
+  const auto branches = unloading_branches(h);
+  EXPECT_EQ(branches.size(), 1u);
+  EXPECT_EQ(static_cast<int>(branches.at(0).peak), peak_step);
+  return {analyze_branch(h, P, branches.at(0), context, truth), truth->half_width};
+}
+
+}  // namespace
+
+TEST(UnloadingFit, RecoversAPowerLawExactlyAndWithNoise) {
+  for (double m : {1.2, 1.5, 2.0}) {
+    for (double noise : {0.0, 1e-3}) {
+      SCOPED_TRACE(::testing::Message() << "m = " << m << ", noise = " << noise);
+      const double B = 3e9, h_f = 0.6e-6, h_max = 1e-6;
+      std::vector<double> h, P;
+      synthetic_branch(B, m, h_f, h_max, noise, h, P);
+      const PowerLawFit fit = fit_unloading(h, P, 0.2, 0.98);
+      const double S = m * B * std::pow(h_max - h_f, m - 1.0);
+      // Tolerances: exact data to round-off of the fit; 0.1% noise on ~30 points moves S by a few 0.1%.
+      const double tolerance = noise == 0.0 ? 1e-6 : 2e-2;
+      EXPECT_NEAR(fit.m, m, tolerance * m);
+      EXPECT_NEAR(fit.h_f, h_f, tolerance * h_max);
+      EXPECT_NEAR(fit.stiffness, S, tolerance * S);
+      EXPECT_NEAR(fit.force_at(h_max), P.front(), tolerance * P.front());
+      // The residual is relative to P_max, the noise to each point's own P (0.1 to 1 P_max).
+      if (noise > 0) {
+        EXPECT_GT(fit.rms_residual, 0.1 * noise);
+        EXPECT_LT(fit.rms_residual, noise);
+      }
+    }
+  }
+}
+
+TEST(UnloadingFit, ABranchTooShortIsAnErrorNotANumber) {
+  const std::vector<double> h{1e-6, 0.95e-6, 0.9e-6}, P{1.0, 0.8, 0.6};
+  try {
+    fit_unloading(h, P, 0.2, 0.98);
+    FAIL() << "a 2-point branch was fitted";
+  } catch (const AnalysisError& e) {
+    EXPECT_NE(std::string(e.what()).find("at least 4"), std::string::npos) << e.what();
+  }
+  // A depth that does not decrease within the branch.
+  const std::vector<double> h2{1e-6, 0.99e-6, 0.98e-6, 0.985e-6, 0.97e-6, 0.96e-6}, P2{1.0, 0.9, 0.8, 0.7, 0.6, 0.5};
+  EXPECT_THROW(fit_unloading(h2, P2, 0.2, 0.98), AnalysisError);
+}
+
+TEST(IndentationAnalysis, ElasticSphereGivesTheContactModulusAndHalfTheDepth) {
+  // Hertz: an elastic sphere unloads along its loading curve, P = 4/3 E* sqrt(R) h^{3/2}:
+  // m = 3/2, h_f = 0, h_c = h_max - 0.75 P / S = h_max / 2, E_r = E*.
+  const LoadCase lc = shipped_case("axisymmetric/elastic_sphere.toml",
+                                   {"load.path=[0.0, 5e-6, 0.0]", "load.increments=[10, 20]"});
+  const AnalysedRun run = analyse(lc);
+  const BranchAnalysis& a = run.analysis;
+  const double e_star = contact_modulus(lc);
+  std::cout << "elastic sphere: E_r / E* - 1 = " << *a.reduced_modulus / e_star - 1 << " (fit), "
+            << *a.true_reduced_modulus / e_star - 1 << " (exact S, true area); h_c / h_max = " << a.h_c / a.h_max
+            << "; m = " << a.fit.m << "; S_exact / (2 E* a) - 1 = " << *a.exact_stiffness / (2 * e_star * run.peak_half_width) - 1
+            << "; pile-up ratio " << *a.pile_up_ratio << "\n";
+  EXPECT_NEAR(*a.reduced_modulus / e_star, 1.0, 0.02);
+  EXPECT_NEAR(a.h_c / a.h_max, 0.5, 0.01);
+  EXPECT_NEAR(a.fit.m, 1.5, 0.01);
+  EXPECT_NEAR(*a.specimen_modulus / lc.material.E, 1.0, 0.02);
+  // The exact tangent at a fixed contact set: the discrete flat-punch stiffness of the contact
+  // radius, first order in the mesh (as the flat punch of test_axisymmetric), 2 E* a in the limit.
+  EXPECT_NEAR(*a.exact_stiffness / (2 * e_star * run.peak_half_width), 1.0, 0.03);
+  EXPECT_NEAR(*a.pile_up_ratio, 1.0, 0.02);
+  EXPECT_NEAR(a.elastic_work / a.total_work, 1.0, 0.01);  // nothing dissipated
+}
+
+TEST(IndentationAnalysis, PileUpForLittleHardeningSinkInForStrongHardening) {
+  // A J2 steel-like sphere (E / sigma_y = 420) at h / R = 0.02: with n = 0.05 the material piles
+  // up around the sphere (true area > Oliver-Pharr's, which assumes sink-in), with n = 0.45 it
+  // sinks in (Bolshakov and Pharr 1998; Taljat and Pharr 2004).  A coarse mesh: the trend, not
+  // the figure, is asserted.
+  const auto ratio = [](double n) {
+    const LoadCase lc = shipped_case("axisymmetric/steel_sphere.toml",
+                                     {"material.n=" + std::to_string(n), "mesh.contact_nodes=12",
+                                      "load.path=[0.0, 10e-6, 8.5e-6, 0.0]", "load.increments=[10, 8, 1]"});
+    const BranchAnalysis a = analyse(lc).analysis;
+    std::cout << "steel sphere n = " << n << ": pile-up ratio " << *a.pile_up_ratio << ", E_r(OP) / E* - 1 = "
+              << *a.reduced_modulus / contact_modulus(lc) - 1 << ", true E_r / E* - 1 = "
+              << *a.true_reduced_modulus / contact_modulus(lc) - 1 << "\n";
+    return *a.pile_up_ratio;
+  };
+  EXPECT_GT(ratio(0.05), 1.05);
+  EXPECT_LT(ratio(0.45), 0.95);
+}
