@@ -20,6 +20,7 @@
 namespace fs = std::filesystem;
 using namespace indentsim;
 using indentsim::testing::shipped_case;
+using indentsim::testing::contact_modulus;
 using indentsim::testing::source_path;
 
 namespace {
@@ -36,7 +37,6 @@ FinalState run_to_end(const LoadCase& lc) {
   return last;
 }
 
-double contact_modulus(const LoadCase& lc) { return lc.material.E / (1 - lc.material.nu * lc.material.nu); }
 
 }  // namespace
 

@@ -16,6 +16,7 @@
 
 using namespace indentsim;
 using indentsim::testing::shipped_case;
+using indentsim::testing::contact_modulus;
 
 namespace {
 
@@ -33,7 +34,6 @@ void synthetic_branch(double B, double m, double h_f, double h_max, double noise
   ASSERT_NEAR(P.back() / P_max, 0.1, 1e-2);
 }
 
-double contact_modulus(const LoadCase& lc) { return lc.material.E / (1.0 - lc.material.nu * lc.material.nu); }
 
 // The summary's analysis of the run's first unloading branch, run through the library as the CLI does.
 struct AnalysedRun {

@@ -107,6 +107,9 @@ protected:
 
 inline std::string source_path(const std::string& relative) { return std::string(INDENTSIM_SOURCE_DIR) + "/" + relative; }
 
+/// E* = E / (1 - nu^2), the plane-strain (contact) modulus of a rigid-indenter contact.
+inline double contact_modulus(const LoadCase& lc) { return lc.material.E / (1.0 - lc.material.nu * lc.material.nu); }
+
 inline LoadCase shipped_case(const std::string& name, const std::vector<std::string>& overrides = {}) {
   return read_load_case(source_path("loadcases/" + name), overrides);
 }
