@@ -7,7 +7,8 @@ packages=(
   build-essential cmake pkg-config git
   libsundials-dev libsuitesparse-dev libeigen3-dev libfmt-dev
   libgtest-dev libtomlplusplus-dev libcli11-dev
-  libcsv-dev                 # CSV reader of measured tip profiles (punch.profile)
+  libcsv-dev                 # CSV reader of measured tip profiles and load-depth curves
+  nlohmann-json3-dev         # JSON: summary.json read back and analysis.json (indentsim analyze)
   libopenblas0-pthread       # BLAS for CHOLMOD's supernodal factorization (takes over libblas.so.3)
   python3 python3-matplotlib
   clang libclang-rt-14-dev   # libFuzzer targets (scripts/fuzz.sh)

@@ -19,9 +19,12 @@
 // the true contact width and the mean pressure P / 2a are defined; E_r is not -- a half-plane's
 // compliance grows with the specimen's size (log(L / a), Johnson, Contact Mechanics §2.8), so no
 // area-based modulus exists.  The analysis says so instead of printing a number.
+#include <stdexcept>
 #include <optional>
 #include <string>
 #include <vector>
+
+#include <nlohmann/json_fwd.hpp>
 
 #include "indentsim/load_case.hpp"
 
@@ -57,6 +60,14 @@ struct CurveBranch {
 };
 /// Every unloading branch: a local maximum of the depth followed by decreasing depths.
 std::vector<CurveBranch> unloading_branches(const std::vector<double>& depth);
+
+/// The unloading branches of a measured, load-controlled curve: from a maximum of the force while
+/// the force falls; a fall that stays above fit_range[0] P_max is a hold's noise and is skipped.
+/// Throws AnalysisError when there is no branch, or when the depth rises within the part of a
+/// branch that is fitted (naming the rows: `rows[k]` is point k's row in the file).
+std::vector<CurveBranch> measured_unloading_branches(const std::vector<double>& depth, const std::vector<double>& force,
+                                                     const AnalysisInput& settings,
+                                                     const std::vector<std::size_t>& rows = {});
 
 /// What a simulated run adds at a reversal: the exact unloading stiffness and the true contact.
 struct TrueContact {
@@ -95,7 +106,11 @@ BranchAnalysis analyze_branch(const std::vector<double>& depth, const std::vecto
                               const CurveBranch& branch, const AnalysisContext& context,
                               const std::optional<TrueContact>& truth = std::nullopt);
 
-/// The branch's numbers as a JSON object (units in the key names' documentation: SI).
+/// The branch's numbers as a JSON object, SI (analysis_units says which).
+nlohmann::ordered_json branch_json(const BranchAnalysis& analysis, const AnalysisContext& context);
+/// The same as text, each line after the first indented by `indent` (for summary.json).
 std::string to_json(const BranchAnalysis& analysis, const AnalysisContext& context, const std::string& indent);
+/// The units of branch_json's numbers in the scene, stated once per output.
+nlohmann::ordered_json analysis_units(SceneKind scene);
 
 }  // namespace indentsim

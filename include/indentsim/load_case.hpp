@@ -7,6 +7,8 @@
 #include <utility>
 #include <vector>
 
+#include "indentsim/curve_csv.hpp"
+
 namespace indentsim {
 
 /// The scene: plane strain (a long cylinder or wedge on a block, per unit thickness) or
@@ -124,6 +126,23 @@ LoadCase read_load_case(const std::filesystem::path& file,
 /// Parses a load case from TOML text (tests, fuzzing); `source` names it in messages.
 LoadCase parse_load_case(const std::string& toml_text, const std::string& source,
                          const std::vector<std::string>& overrides = {});
+
+/// What `indentsim analyze` reads besides a measured curve: the indenter (every punch.* key;
+/// punch.shape required), the scene (geometry.kind, axisymmetric unless given), the analysis.*
+/// keys, the specimen's material.nu (optional: for the specimen modulus) and the [curve] keys
+/// (depth_column, force_column, depth_unit, force_unit; see curve_csv.hpp).  No other key.
+struct AnalysisSetup {
+  std::string source;  ///< the TOML file, or "--set"
+  SceneKind scene = SceneKind::axisymmetric;
+  PunchInput punch;
+  AnalysisInput analysis;
+  std::optional<double> specimen_nu;
+  CurveColumns columns;
+};
+
+/// Reads an analysis setup from a small TOML file (or none: only `overrides`); throws InputError.
+AnalysisSetup read_analysis_setup(const std::optional<std::filesystem::path>& file,
+                                  const std::vector<std::string>& overrides);
 
 /// Checks every physical constraint (E > 0, -1 < nu < 0.5, ...); throws InputError.
 void validate(const LoadCase& load_case);

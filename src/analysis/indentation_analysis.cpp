@@ -7,6 +7,7 @@
 
 #include <Eigen/Dense>
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 #include <unsupported/Eigen/NonLinearOptimization>
 
 #include "indentsim/punch.hpp"
@@ -67,7 +68,7 @@ PowerLawFit fit_unloading(const std::vector<double>& depth, const std::vector<do
   std::vector<double> h, P;
   for (std::size_t i = 0; i < depth.size(); ++i)
     if (force[i] >= lower * P_max && force[i] <= upper * P_max) {
-      if (!h.empty() && !(depth[i] < h.back()))
+      if (!h.empty() && depth[i] > h.back())
         throw AnalysisError(fmt::format("the depth does not decrease along the unloading branch (point {} at h = {:g} m "
                                         "after {:g} m)",
                                         i + 1, depth[i], h.back()));
@@ -141,6 +142,51 @@ std::vector<CurveBranch> unloading_branches(const std::vector<double>& depth) {
   return branches;
 }
 
+std::vector<CurveBranch> measured_unloading_branches(const std::vector<double>& depth, const std::vector<double>& force,
+                                                     const AnalysisInput& settings,
+                                                     const std::vector<std::size_t>& rows) {
+  const auto row = [&](std::size_t k) { return k < rows.size() ? rows[k] : k + 1; };
+  const double lower = settings.fit_range[0], upper = settings.fit_range[1];
+  std::vector<CurveBranch> branches;
+  std::size_t loading_start = 0, i = 0;
+  const std::size_t n = force.size();
+  while (i + 1 < n) {
+    while (i + 1 < n && force[i + 1] >= force[i]) ++i;  // loading (or holding)
+    std::size_t peak = i;
+    while (i + 1 < n && force[i + 1] <= force[i]) ++i;  // unloading
+    if (i == peak) continue;
+    // A fall that does not reach the fit range's lower end is a hold's noise, not an unloading.
+    if (!(force[peak] > 0.0) || force[i] > lower * force[peak]) continue;
+    // The unloading starts where the depth is deepest: at the end of a hold at P_max (whose
+    // creep a noisy force would otherwise cut short), h_max of ISO 14577.
+    std::size_t deepest = peak;
+    for (std::size_t k = peak; k <= i && force[k] >= upper * force[peak]; ++k)
+      if (depth[k] > depth[deepest]) deepest = k;
+    peak = deepest;
+    // Load control: the depth must fall with the force over the part fitted.  A depth that still
+    // grows there (creep, a "nose") or jumps back is data the power law cannot describe.
+    double previous = depth[peak];
+    std::size_t previous_k = peak;
+    for (std::size_t k = peak + 1; k <= i; ++k) {
+      if (force[k] > upper * force[peak] || force[k] < lower * force[peak]) continue;
+      if (depth[k] > previous)
+        throw AnalysisError(fmt::format("the depth is not monotone in the unloading branch from row {}: it rises from "
+                                        "{:.6g} m (row {}) to {:.6g} m (row {}) while the force falls (creep at the "
+                                        "start of unloading, or noise; ISO 14577 asks for a hold before unloading)",
+                                        row(peak), previous, row(previous_k), depth[k], row(k)));
+      previous = depth[k];
+      previous_k = k;
+    }
+    branches.push_back(CurveBranch{loading_start, peak, i});
+    loading_start = i;
+  }
+  if (branches.empty())
+    throw AnalysisError(fmt::format("has no unloading branch: the force never falls from a maximum to below {:g}% of "
+                                    "it (analysis.fit_range[0]; a partial unloading needs a higher lower bound)",
+                                    100 * lower));
+  return branches;
+}
+
 double contact_depth_factor(const AnalysisContext& context) {
   if (context.settings.epsilon) return *context.settings.epsilon;
   switch (context.shape) {
@@ -187,6 +233,14 @@ BranchAnalysis analyze_branch(const std::vector<double>& depth, const std::vecto
   a.h_c = a.h_max - contact_depth_factor(context) * a.P_max / a.fit.stiffness;
   const auto rim = context.punch->rim();
   a.contact_radius = rim ? *rim : (a.h_c > 0.0 ? context.punch->geometric_contact_radius(a.h_c) : 0.0);
+  if (!rim && a.h_c > 0.0 && !(context.punch->surface_height(a.contact_radius) >= a.h_c * (1.0 - 1e-9)))
+    throw AnalysisError(fmt::format("the contact depth h_c = {:g} m lies beyond the indenter's shape ({}): no area "
+                                    "function there",
+                                    a.h_c, context.punch->name()));
+  if (!rim && !(a.h_c > 0.0))
+    throw AnalysisError(fmt::format("the contact depth h_c = h_max - epsilon P_max / S = {:g} m is not positive: the "
+                                    "unloading is too compliant for Oliver-Pharr (S = {:g} N/m)",
+                                    a.h_c, a.fit.stiffness));
   a.area = projected_area(context.scene, a.contact_radius);
   const bool axisymmetric = context.scene == SceneKind::axisymmetric;
   if (a.area > 0.0) a.hardness = a.P_max / a.area;
@@ -216,45 +270,63 @@ BranchAnalysis analyze_branch(const std::vector<double>& depth, const std::vecto
 }
 
 namespace {
-std::string number_or_null(const std::optional<double>& v) {
-  return v && std::isfinite(*v) ? fmt::format("{:.10g}", *v) : std::string("null");
+/// A number, or null when there is none (or it is not finite).
+nlohmann::ordered_json number_or_null(const std::optional<double>& v) {
+  return v && std::isfinite(*v) ? nlohmann::ordered_json(*v) : nlohmann::ordered_json(nullptr);
 }
 }  // namespace
 
-std::string to_json(const BranchAnalysis& a, const AnalysisContext& context, const std::string& indent) {
+nlohmann::ordered_json branch_json(const BranchAnalysis& a, const AnalysisContext& context) {
   const bool axisymmetric = context.scene == SceneKind::axisymmetric;
-  std::string s = "{\n";
-  const auto field = [&](const std::string& name, const std::string& value, bool last = false) {
-    s += fmt::format("{}  \"{}\": {}{}\n", indent, name, value, last ? "" : ",");
-  };
-  field("P_max", fmt::format("{:.10g}", a.P_max));
-  field("h_max", fmt::format("{:.10g}", a.h_max));
-  field("fit", fmt::format("{{\"B\": {:.10g}, \"m\": {:.10g}, \"h_f\": {:.10g}, \"points\": {}, \"range\": [{}, {}], "
-                           "\"rms_residual\": {:.3g}}}",
-                           a.fit.B, a.fit.m, a.fit.h_f, a.fit.points, context.settings.fit_range[0],
-                           context.settings.fit_range[1], a.fit.rms_residual));
-  field("S_fit", fmt::format("{:.10g}", a.fit.stiffness));
-  field("S_exact", number_or_null(a.exact_stiffness));
-  field("epsilon", fmt::format("{}", contact_depth_factor(context)));
-  field("beta", fmt::format("{}", context.settings.beta));
-  field("h_c", fmt::format("{:.10g}", a.h_c));
-  field("contact_radius", fmt::format("{:.10g}", a.contact_radius));
-  field("A_c", fmt::format("{:.10g}", a.area));
-  field("H", fmt::format("{:.10g}", a.hardness));
-  field("E_r", number_or_null(a.reduced_modulus));
-  if (!axisymmetric)
-    field("E_r_note", "\"not defined in plane strain: a half-plane's compliance depends on the specimen size\"");
-  field("E", number_or_null(a.specimen_modulus));
-  field("h_f", fmt::format("{:.10g}", a.residual_depth));
-  field("W_t", fmt::format("{:.10g}", a.total_work));
-  field("W_e", fmt::format("{:.10g}", a.elastic_work));
-  field("W_e_over_W_t", fmt::format("{:.6g}", a.total_work > 0 ? a.elastic_work / a.total_work : 0.0));
-  field("true_contact_radius", number_or_null(a.true_contact_radius));
-  field("true_area", number_or_null(a.true_area));
-  field("true_H", number_or_null(a.true_hardness));
-  field("true_E_r", number_or_null(a.true_reduced_modulus));
-  field("pile_up_ratio", number_or_null(a.pile_up_ratio), true);
-  return s + indent + "}";
+  nlohmann::ordered_json j;
+  j["P_max"] = a.P_max;
+  j["h_max"] = a.h_max;
+  j["fit"] = {{"B", a.fit.B},
+              {"m", a.fit.m},
+              {"h_f", a.fit.h_f},
+              {"points", a.fit.points},
+              {"range", context.settings.fit_range},
+              {"rms_residual", a.fit.rms_residual}};
+  j["S_fit"] = a.fit.stiffness;
+  j["S_exact"] = number_or_null(a.exact_stiffness);
+  j["epsilon"] = contact_depth_factor(context);
+  j["beta"] = context.settings.beta;
+  j["h_c"] = a.h_c;
+  j["contact_radius"] = a.contact_radius;
+  j["A_c"] = a.area;
+  j["H"] = a.hardness;
+  j["E_r"] = number_or_null(a.reduced_modulus);
+  if (!axisymmetric) j["E_r_note"] = "not defined in plane strain: a half-plane's compliance depends on the specimen size";
+  j["E"] = number_or_null(a.specimen_modulus);
+  j["h_f"] = a.residual_depth;
+  j["W_t"] = a.total_work;
+  j["W_e"] = a.elastic_work;
+  j["W_e_over_W_t"] = a.total_work > 0 ? a.elastic_work / a.total_work : 0.0;
+  j["true_contact_radius"] = number_or_null(a.true_contact_radius);
+  j["true_area"] = number_or_null(a.true_area);
+  j["true_H"] = number_or_null(a.true_hardness);
+  j["true_E_r"] = number_or_null(a.true_reduced_modulus);
+  j["pile_up_ratio"] = number_or_null(a.pile_up_ratio);
+  return j;
+}
+
+nlohmann::ordered_json analysis_units(SceneKind scene) {
+  if (scene == SceneKind::axisymmetric)
+    return {{"depth", "m"},    {"force", "N"},       {"stiffness", "N/m"}, {"area", "m^2"},
+            {"stress", "Pa"},  {"work", "J"},        {"B", "N/m^m"}};
+  return {{"depth", "m"},
+          {"force", "N/m (per unit thickness)"},
+          {"stiffness", "N/m per m"},
+          {"area", "m (the contact width 2a)"},
+          {"stress", "Pa"},
+          {"work", "J/m"},
+          {"B", "N/m per m^m"}};
+}
+
+std::string to_json(const BranchAnalysis& a, const AnalysisContext& context, const std::string& indent) {
+  std::string text;
+  for (char c : branch_json(a, context).dump(2)) text += c == '\n' ? "\n" + indent : std::string(1, c);
+  return text;
 }
 
 }  // namespace indentsim

@@ -18,9 +18,12 @@
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include "indentsim/checkpoint.hpp"
+#include "indentsim/curve_analysis.hpp"
 #include "indentsim/error.hpp"
+#include "indentsim/file_system.hpp"
 #include "indentsim/interruption.hpp"
 #include "indentsim/io.hpp"
 #include "indentsim/load_case.hpp"
@@ -283,28 +286,78 @@ int command_resume(const std::string& argument, const std::vector<std::string>& 
 }
 
 
-/// `indentsim plot DIR [--step N]`: the figure script beside this executable, run by Debian's
-/// python3 (the one the setup script gives matplotlib), whatever python3 comes first on the PATH.
-int command_plot(const std::string& dir, const std::optional<int>& step) {
+/// The figure script beside this executable (installed with it by CMake).
+fs::path figure_script(const std::string& for_what) {
   std::error_code ec;
   const fs::path self = fs::read_symlink("/proc/self/exe", ec);
   const fs::path script = self.parent_path() / "plot_results.py";
   if (ec || !fs::is_regular_file(script))
-    throw InputError(dir, "plot", fmt::format("the figure script is not beside the executable (looked for {})",
-                                              script.string()));
-  if (!fs::is_directory(dir)) throw InputError(dir, "plot", "is not a run's output folder");
+    throw InputError(for_what, "plot", fmt::format("the figure script is not beside the executable (looked for {})",
+                                                   script.string()));
+  return script;
+}
+
+/// Replaces this process with Debian's python3 (the one the setup script gives matplotlib)
+/// running `args`, whatever python3 comes first on the PATH.
+[[noreturn]] void exec_python(std::vector<std::string> args, const std::string& for_what) {
   const std::string python = fs::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
-  std::vector<std::string> args{python, script.string(), dir};
-  if (step) {
-    args.push_back("--step");
-    args.push_back(std::to_string(*step));
-  }
+  args.insert(args.begin(), python);
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
   std::fflush(stdout);
   ::execvp(argv[0], argv.data());
-  throw InputError(dir, "plot", fmt::format("cannot run {}: {}", python, std::strerror(errno)));
+  throw InputError(for_what, "plot", fmt::format("cannot run {}: {}", python, std::strerror(errno)));
+}
+
+/// `indentsim plot DIR [--step N]`: the figure script beside this executable, run by Debian's
+/// python3 (the one the setup script gives matplotlib), whatever python3 comes first on the PATH.
+int command_plot(const std::string& dir, const std::optional<int>& step) {
+  const fs::path script = figure_script(dir);
+  if (!fs::is_directory(dir)) throw InputError(dir, "plot", "is not a run's output folder");
+  std::vector<std::string> args{script.string(), dir};
+  if (step) {
+    args.push_back("--step");
+    args.push_back(std::to_string(*step));
+  }
+  exec_python(args, dir);
+}
+
+struct AnalyzeOptions {
+  std::string indenter_file, out, depth_column, force_column, depth_unit, force_unit;
+  bool plot = false;
+};
+
+/// `indentsim analyze CURVE`: Oliver-Pharr on every unloading branch of a run's curve (its folder
+/// or curve.csv) or of a measured CSV; prints the results and writes analysis.json (and with
+/// --plot its figure).  Anything that cannot be analysed exits 2 with nothing written.
+int command_analyze(const std::string& curve, std::vector<std::string> overrides, const AnalyzeOptions& o) {
+  const bool run = is_run_output(curve);
+  const bool measured_flags = !o.indenter_file.empty() || !o.depth_column.empty() || !o.force_column.empty() ||
+                              !o.depth_unit.empty() || !o.force_unit.empty();
+  if (run && measured_flags)
+    throw InputError(curve, "--indenter", "is a run's output: its indenter and columns are the run's own (only "
+                                          "--set analysis.* applies)");
+  CurveAnalysis analysis;
+  if (run) {
+    analysis = analyze_run_curve(curve, overrides);
+  } else {
+    std::error_code ec;
+    if (!fs::is_regular_file(curve, ec))
+      throw InputError(curve, "curve", "is neither a run's output folder nor a CSV file of a load-depth curve");
+    for (const auto& [key, value] : {std::pair{"curve.depth_column", o.depth_column}, {"curve.force_column", o.force_column},
+                                     {"curve.depth_unit", o.depth_unit}, {"curve.force_unit", o.force_unit}})
+      if (!value.empty()) overrides.push_back(std::string(key) + "=" + toml_string(value));
+    const AnalysisSetup setup = read_analysis_setup(
+        o.indenter_file.empty() ? std::nullopt : std::optional<fs::path>(o.indenter_file), overrides);
+    analysis = analyze_measured_curve(curve, setup);
+  }
+  const fs::path out = o.out.empty() ? default_analysis_path(curve, analysis.simulated) : fs::path(o.out);
+  const fs::path script = o.plot ? figure_script(curve) : fs::path();
+  write_file_atomically(out, analysis_json(analysis).dump(2) + "\n");
+  fmt::print("{}analysis: {}\n", analysis_table(analysis), out.string());
+  if (o.plot) exec_python({script.string(), "--analysis", out.string()}, curve);
+  return 0;
 }
 
 int command_keys(bool markdown) {
@@ -357,6 +410,24 @@ int main(int argc, char** argv) {
   plot->add_option("dir", file, "the run's output folder")->required();
   plot->add_option("--step", plot_step, "the increment to show (default: the deepest of the load path)");
 
+  AnalyzeOptions analyze_options;
+  CLI::App* analyze = app.add_subcommand(
+      "analyze", "Oliver-Pharr hardness and modulus of every unloading branch of a run (its folder) or of a measured "
+                 "load-depth CSV; writes analysis.json");
+  analyze->add_option("curve", file, "a run's output folder (or its curve.csv), or a measured CSV")->required();
+  analyze->add_option("--indenter", analyze_options.indenter_file,
+                      "measured curve: TOML with [punch], [analysis], [curve] and optionally geometry.kind, material.nu");
+  analyze->add_option("--set", overrides, "set one key: punch.shape=cone, analysis.beta=1.034, curve.depth_unit=nm, ...")
+      ->allow_extra_args(false)
+      ->take_all();
+  analyze->add_option("--depth-column", analyze_options.depth_column, "measured curve: the depth column's header name");
+  analyze->add_option("--force-column", analyze_options.force_column, "measured curve: the force column's header name");
+  analyze->add_option("--depth-unit", analyze_options.depth_unit, "measured curve: nm, um, mm or m (else from the header)");
+  analyze->add_option("--force-unit", analyze_options.force_unit, "measured curve: mN, uN, nN or N (else from the header)");
+  analyze->add_option("--out", analyze_options.out, "analysis.json's path (default: the run's folder, or NAME.analysis.json "
+                                                    "beside a measured file)");
+  analyze->add_flag("--plot", analyze_options.plot, "also draw the figure (PNG and SVG beside analysis.json)");
+
   bool markdown = false;
   CLI::App* keys = app.add_subcommand("keys", "list every load-case key: type, default, accepted values, unit, meaning");
   keys->add_flag("--markdown", markdown, "as the README's Markdown table");
@@ -399,6 +470,7 @@ int main(int argc, char** argv) {
         throw InputError("--out", "--out", "must name a folder (it is empty)");
     if (keys->parsed()) return command_keys(markdown);
     if (plot->parsed()) return command_plot(file, plot_step);
+    if (analyze->parsed()) return command_analyze(file, overrides, analyze_options);
     if (run->parsed()) return command_run(file, overrides, out, quiet);
     if (resume->parsed()) return list ? command_list_checkpoints(file) : command_resume(file, overrides, out, quiet);
     return command_check(file, overrides);

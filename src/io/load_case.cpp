@@ -711,9 +711,9 @@ LoadCase parse_and_override(const std::string& text, const std::string& source,
 
 }  // namespace
 
-/// A tip profile: r from 0 strictly increasing, g from 0 not decreasing, all finite, and high
-/// enough that the deepest depth stays on it.
-void validate_profile(const LoadCase& lc) {
+/// A tip profile: r from 0 strictly increasing, g from 0 not decreasing, all finite; with a load
+/// path (`within_run`), high enough that the deepest depth stays on it and within the specimen.
+void validate_profile(const LoadCase& lc, bool within_run) {
   const auto& points = lc.punch.profile;
   const bool from_file = !lc.punch.profile_file.empty();
   const std::string key = from_file ? "punch.profile" : "punch.profile_points";
@@ -734,6 +734,7 @@ void validate_profile(const LoadCase& lc) {
       fail(k, fmt::format("has g = {} after g = {}: the profile must not descend (not monotone)", g,
                           points[k - 1].second));
   }
+  if (!within_run) return;
   if (!(points.back().second > lc.max_depth()))
     throw InputError(lc.source, key,
                      fmt::format("the profile rises only {} m, not above the deepest depth {} m: the specimen would "
@@ -743,6 +744,43 @@ void validate_profile(const LoadCase& lc) {
     throw InputError(lc.source, key, fmt::format("reaches r = {} m, beyond the specimen (geometry.lx = {} m)",
                                                  points.back().first, lc.geometry.lx));
 }
+
+namespace {
+
+/// The indenter on its own: what its shape needs, whatever specimen it meets.
+void validate_punch_shape(const LoadCase& lc) {
+  const auto& punch = lc.punch;
+  if ((punch.shape == PunchShapeKind::sphere || punch.shape == PunchShapeKind::flat) && !(punch.radius > 0.0))
+    throw InputError(lc.source, "punch.radius", fmt::format("must be > 0 (got {})", punch.radius));
+  if (punch.shape == PunchShapeKind::cone) {
+    if (!(punch.half_angle > 0.0 && punch.half_angle < 90.0))
+      throw InputError(lc.source, "punch.half_angle",
+                       fmt::format("must lie in (0, 90) degrees, the angle between axis and face (got {})",
+                                   punch.half_angle));
+    if (!(punch.tip_radius >= 0.0))
+      throw InputError(lc.source, "punch.tip_radius", fmt::format("must be >= 0 (got {})", punch.tip_radius));
+  }
+  if (punch.shape == PunchShapeKind::profile) validate_profile(lc, false);
+}
+
+void validate_analysis(const LoadCase& lc) {
+  const auto fail = [&](const std::string& key, const std::string& problem) {
+    throw InputError(lc.source, key, problem);
+  };
+  const auto& fit = lc.analysis.fit_range;
+  if (fit.size() != 2 || !(fit[0] >= 0.0 && fit[0] < fit[1] && fit[1] <= 1.0))
+    fail("analysis.fit_range", "must be two fractions of P_max, 0 <= lower < upper <= 1 (for example [0.2, 0.98])");
+  if (lc.analysis.epsilon && !(*lc.analysis.epsilon > 0.0 && *lc.analysis.epsilon <= 1.0))
+    fail("analysis.epsilon", fmt::format("must lie in (0, 1] (got {})", *lc.analysis.epsilon));
+  if (!(lc.analysis.beta >= 1.0 && lc.analysis.beta <= 1.2))
+    fail("analysis.beta", fmt::format("must lie in [1, 1.2] (got {})", lc.analysis.beta));
+  if (lc.analysis.indenter_E && !(*lc.analysis.indenter_E > 0.0))
+    fail("analysis.indenter_E", fmt::format("must be > 0 (got {})", *lc.analysis.indenter_E));
+  if (!(lc.analysis.indenter_nu > -1.0 && lc.analysis.indenter_nu < 0.5))
+    fail("analysis.indenter_nu", fmt::format("must lie in (-1, 0.5) (got {})", lc.analysis.indenter_nu));
+}
+
+}  // namespace
 
 void validate(const LoadCase& lc) {
   const auto fail = [&](const std::string& key, const std::string& problem) {
@@ -755,23 +793,18 @@ void validate(const LoadCase& lc) {
   positive("geometry.ly", lc.geometry.ly);
   const auto& punch = lc.punch;
   const bool has_radius = punch.shape == PunchShapeKind::sphere || punch.shape == PunchShapeKind::flat;
-  if (has_radius) positive("punch.radius", punch.radius);
+  validate_punch_shape(lc);
   if (punch.shape == PunchShapeKind::flat && !(punch.radius < lc.geometry.lx))
     fail("punch.radius", fmt::format("the flat punch ({} m) is not narrower than the specimen (geometry.lx = {} m)",
                                      punch.radius, lc.geometry.lx));
   if (punch.shape == PunchShapeKind::cone) {
-    if (!(punch.half_angle > 0.0 && punch.half_angle < 90.0))
-      fail("punch.half_angle", fmt::format("must lie in (0, 90) degrees, the angle between axis and face (got {})",
-                                           punch.half_angle));
-    if (!(punch.tip_radius >= 0.0))
-      fail("punch.tip_radius", fmt::format("must be >= 0 (got {})", punch.tip_radius));
     const double cap = punch.tip_radius * std::cos(punch.half_angle * std::acos(-1.0) / 180.0);
     if (!(cap < lc.geometry.lx))
       fail("punch.tip_radius", fmt::format("the spherical cap of radius {} m meets the face at r = {:.4g} m, beyond "
                                            "the specimen (geometry.lx = {} m): it does not fit",
                                            punch.tip_radius, cap, lc.geometry.lx));
   }
-  if (punch.shape == PunchShapeKind::profile && !lc.load.path.empty()) validate_profile(lc);
+  if (punch.shape == PunchShapeKind::profile && !lc.load.path.empty()) validate_profile(lc, true);
   positive("material.E", lc.material.E);
   // Stresses and forces are E times O(1) numbers and their squares are formed (norms, J2); beyond
   // these bounds double precision cannot hold them.  Plausible moduli are warned about, not here.
@@ -825,16 +858,7 @@ void validate(const LoadCase& lc) {
   if (lc.mesh.growth && !(*lc.mesh.growth >= 1.0 && *lc.mesh.growth <= 2.0))
     fail("mesh.growth", fmt::format("must lie in [1, 2] (got {})", *lc.mesh.growth));
 
-  const auto& fit = lc.analysis.fit_range;
-  if (fit.size() != 2 || !(fit[0] >= 0.0 && fit[0] < fit[1] && fit[1] <= 1.0))
-    fail("analysis.fit_range", "must be two fractions of P_max, 0 <= lower < upper <= 1 (for example [0.2, 0.98])");
-  if (lc.analysis.epsilon && !(*lc.analysis.epsilon > 0.0 && *lc.analysis.epsilon <= 1.0))
-    fail("analysis.epsilon", fmt::format("must lie in (0, 1] (got {})", *lc.analysis.epsilon));
-  if (!(lc.analysis.beta >= 1.0 && lc.analysis.beta <= 1.2))
-    fail("analysis.beta", fmt::format("must lie in [1, 1.2] (got {})", lc.analysis.beta));
-  if (lc.analysis.indenter_E) positive("analysis.indenter_E", *lc.analysis.indenter_E);
-  if (!(lc.analysis.indenter_nu > -1.0 && lc.analysis.indenter_nu < 0.5))
-    fail("analysis.indenter_nu", fmt::format("must lie in (-1, 0.5) (got {})", lc.analysis.indenter_nu));
+  validate_analysis(lc);
   if (lc.output.dir.empty()) fail("output.dir", "must not be empty");
   if (lc.output.checkpoint_every < 0)
     fail("output.checkpoint_every", fmt::format("must be >= 0 (got {})", lc.output.checkpoint_every));
@@ -928,7 +952,8 @@ LoadCase parse_load_case(const std::string& toml_text, const std::string& source
   return parse_and_override(toml_text, source, overrides, std::filesystem::current_path());
 }
 
-LoadCase read_load_case(const std::filesystem::path& file, const std::vector<std::string>& overrides) {
+namespace {
+std::string read_text(const std::filesystem::path& file) {
   const std::string source = file.string();
   std::error_code ec;
   if (!std::filesystem::is_regular_file(file, ec))
@@ -937,7 +962,73 @@ LoadCase read_load_case(const std::filesystem::path& file, const std::vector<std
   if (!in) throw InputError(source, "", "cannot open for reading");
   std::ostringstream text;
   text << in.rdbuf();
-  return parse_and_override(text.str(), source, overrides, file.parent_path().empty() ? "." : file.parent_path());
+  return text.str();
+}
+std::filesystem::path folder_of(const std::filesystem::path& file) {
+  return file.parent_path().empty() ? "." : file.parent_path();
+}
+}  // namespace
+
+LoadCase read_load_case(const std::filesystem::path& file, const std::vector<std::string>& overrides) {
+  return parse_and_override(read_text(file), file.string(), overrides, folder_of(file));
+}
+
+AnalysisSetup read_analysis_setup(const std::optional<std::filesystem::path>& file,
+                                  const std::vector<std::string>& overrides) {
+  const std::string source = file ? file->string() : std::string("--set");
+  const std::string text = file ? read_text(*file) : std::string();
+  toml::table root;
+  try {
+    root = toml::parse(text, source);
+  } catch (const toml::parse_error& e) {
+    const auto& where = e.source().begin;
+    throw InputError(source, fmt::format("line {}, column {}", where.line, where.column),
+                     fmt::format("not valid TOML: {}", e.description()));
+  }
+  for (const auto& o : overrides) apply_override(root, o, source);
+
+  // The load-case keys an analysis reads (the indenter, its scene, Oliver-Pharr's constants and
+  // the specimen's Poisson's ratio), none required, and the [curve] keys of a measured file.
+  std::vector<KeyDeclaration> keys;
+  for (const auto& k : key_declarations()) {
+    const std::string section = k.section, name = k.name;
+    if (section == "punch" || section == "analysis" || (section == "geometry" && name == "kind") ||
+        (section == "material" && name == "nu")) {
+      keys.push_back(k);
+      keys.back().required = false;
+    }
+  }
+  AnalysisSetup setup;
+  const std::pair<const char*, std::string*> curve_keys[] = {{"depth_column", &setup.columns.depth_column},
+                                                             {"force_column", &setup.columns.force_column},
+                                                             {"depth_unit", &setup.columns.depth_unit},
+                                                             {"force_unit", &setup.columns.force_unit}};
+  for (const auto& [name, target] : curve_keys) keys.push_back(KeyDeclaration{"curve", name, "string", "", "", ""});
+
+  const Reader r(root, source, file ? folder_of(*file) : std::filesystem::current_path());
+  r.check_structure(keys);
+  LoadCase lc;
+  lc.source = source;
+  lc.geometry.kind = SceneKind::axisymmetric;  // instruments indent with bodies of revolution
+  for (const auto& key : keys)
+    if (key.read) key.read(r, lc);
+  for (const auto& [name, target] : curve_keys) r.read_string("curve", name, *target);
+  if (!r.find("punch", "shape"))
+    r.fail("punch.shape", "missing key: the indenter's shape (sphere, cone, flat or profile) gives the area function "
+                          "A(h_c) (--indenter FILE, or --set punch.shape=...)");
+  check_punch_keys(r, lc);
+  validate_punch_shape(lc);
+  validate_analysis(lc);
+  if (r.find("material", "nu")) {
+    if (!(lc.material.nu > -1.0 && lc.material.nu < 0.5))
+      r.fail("material.nu", fmt::format("must lie in (-1, 0.5) (got {})", lc.material.nu));
+    setup.specimen_nu = lc.material.nu;
+  }
+  setup.source = source;
+  setup.scene = lc.geometry.kind;
+  setup.punch = lc.punch;
+  setup.analysis = lc.analysis;
+  return setup;
 }
 
 }  // namespace indentsim

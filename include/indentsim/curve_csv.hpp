@@ -1,0 +1,36 @@
+#pragma once
+// A load-depth curve from a CSV file: a run's own curve.csv or a measured one, as instruments
+// export them (metadata lines, then a header row, then numbers; comma, tab or semicolon).
+//
+// The two columns are picked by their header names (a name matches a header field with or
+// without its unit: "depth" matches "Depth (nm)"); a file of exactly two columns needs none.
+// The units are given (m, mm, um/µm, nm; N, mN, uN/µN) or read from the header ("Depth (nm)",
+// "Load [mN]"); a curve without its units is refused, never guessed.  Depths and forces come
+// back in SI (m, N).
+#include <cstddef>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace indentsim {
+
+struct CurveColumns {
+  std::string depth_column, force_column;  ///< header names; both "" for a two-column file
+  std::string depth_unit, force_unit;      ///< "" : from the header
+};
+
+struct LoadDepthCurve {
+  std::vector<double> depth, force;  ///< [m], [N] (a plane-strain run's force: N/m)
+  std::vector<std::size_t> rows;     ///< the CSV row (from 1) of each point, for messages
+  std::string depth_unit, force_unit;  ///< the units the file was read in
+};
+
+/// Scale factor of a depth unit to metres / a force unit to newtons; 0 when not a known unit.
+double depth_unit_factor(const std::string& unit);
+double force_unit_factor(const std::string& unit);
+
+/// Reads the curve; throws InputError(file, key, problem) naming the file, the key (the column
+/// or unit setting concerned, e.g. "curve.depth_unit", or "row 12") and what is wrong.
+LoadDepthCurve read_curve_csv(const std::filesystem::path& file, const CurveColumns& columns);
+
+}  // namespace indentsim

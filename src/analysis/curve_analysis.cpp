@@ -1,0 +1,214 @@
+#include "indentsim/curve_analysis.hpp"
+
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "indentsim/curve_csv.hpp"
+#include "indentsim/error.hpp"
+#include "indentsim/punch.hpp"
+#include "indentsim/version.hpp"
+
+namespace fs = std::filesystem;
+
+namespace indentsim {
+
+namespace {
+
+/// What the run recorded at each peak step (summary.json), when it was there to see it: a run
+/// resumed after its peak has no live state of it, and then the analysis has no truth either.
+std::map<std::size_t, TrueContact> recorded_truths(const fs::path& summary_file) {
+  std::map<std::size_t, TrueContact> truths;
+  std::ifstream in(summary_file);
+  if (!in) return truths;
+  const nlohmann::json summary = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+  if (!summary.is_object() || !summary.contains("unloading") || !summary["unloading"].is_array()) return truths;
+  for (const auto& u : summary["unloading"]) {
+    if (!u.is_object() || !u.contains("step") || !u["step"].is_number_unsigned()) continue;
+    if (!u.contains("analysis") || !u["analysis"].is_object()) continue;
+    const auto& a = u["analysis"];
+    if (!a.contains("true_contact_radius") || !a["true_contact_radius"].is_number()) continue;
+    TrueContact t;
+    t.half_width = a["true_contact_radius"].get<double>();
+    if (a.contains("S_exact") && a["S_exact"].is_number()) t.stiffness = a["S_exact"].get<double>();
+    truths[u["step"].get<std::size_t>()] = t;
+  }
+  return truths;
+}
+
+AnalysisContext context_of(const CurveAnalysis& c, const PunchShape& punch) {
+  AnalysisContext context;
+  context.scene = c.scene;
+  context.punch = &punch;
+  context.shape = c.punch.shape;
+  context.settings = c.settings;
+  context.specimen_nu = c.specimen_nu;
+  return context;
+}
+
+nlohmann::ordered_json indenter_json(const PunchInput& p, const AnalysisInput& settings) {
+  nlohmann::ordered_json j;
+  j["shape"] = to_string(p.shape);
+  switch (p.shape) {
+    case PunchShapeKind::sphere:
+    case PunchShapeKind::flat: j["radius"] = p.radius; break;
+    case PunchShapeKind::cone:
+      j["half_angle_degrees"] = p.half_angle;
+      j["tip_radius"] = p.tip_radius;
+      break;
+    case PunchShapeKind::profile:
+      if (!p.profile_file.empty()) j["profile_file"] = p.profile_file;
+      j["profile_points"] = p.profile.size();
+      break;
+  }
+  j["E"] = settings.indenter_E ? nlohmann::ordered_json(*settings.indenter_E) : nlohmann::ordered_json("rigid");
+  j["nu"] = settings.indenter_nu;
+  return j;
+}
+
+}  // namespace
+
+bool is_run_output(const fs::path& path) {
+  std::error_code ec;
+  const fs::path dir = fs::is_directory(path, ec) ? path : path.parent_path();
+  if (!fs::is_directory(path, ec) && path.filename() != "curve.csv") return false;
+  return fs::is_regular_file(dir / "case.toml", ec) && fs::is_regular_file(dir / "curve.csv", ec);
+}
+
+fs::path default_analysis_path(const fs::path& curve, bool simulated) {
+  std::error_code ec;
+  if (simulated) return (fs::is_directory(curve, ec) ? curve : curve.parent_path()) / "analysis.json";
+  fs::path out = curve;
+  return out.replace_extension(".analysis.json");
+}
+
+CurveAnalysis analyze_run_curve(const fs::path& path, const std::vector<std::string>& overrides) {
+  std::error_code ec;
+  const fs::path dir = fs::is_directory(path, ec) ? path : path.parent_path();
+  for (const auto& o : overrides)
+    if (o.rfind("analysis.", 0) != 0)
+      throw InputError("--set", printable(o.substr(0, o.find('=')), 60),
+                       "a run's analysis takes analysis.* keys only: its indenter and material are the run's own "
+                       "(case.toml)");
+  const LoadCase lc = read_load_case(dir / "case.toml", overrides);
+  const LoadDepthCurve curve = read_curve_csv(dir / "curve.csv", CurveColumns{"alpha", "P", "m", "N"});
+
+  CurveAnalysis c;
+  c.curve_file = dir / "curve.csv";
+  c.simulated = true;
+  c.scene = lc.geometry.kind;
+  c.punch = lc.punch;
+  c.settings = lc.analysis;
+  c.specimen_nu = lc.material.nu;
+  c.depth = curve.depth;
+  c.force = curve.force;
+  const std::vector<CurveBranch> branches = unloading_branches(c.depth);
+  if (branches.empty())
+    throw InputError(c.curve_file.string(), "curve",
+                     "has no unloading branch: the run's load path never turns back (load.path)");
+  const auto truths = recorded_truths(dir / "summary.json");
+  const auto punch = make_punch(c.punch);
+  const AnalysisContext context = context_of(c, *punch);
+  for (const CurveBranch& b : branches) {
+    // curve.csv holds one row per step from 0: the index is the step.
+    const std::string label = fmt::format("steps {}-{}", b.peak, b.end);
+    const auto truth = truths.find(b.peak);
+    try {
+      c.branches.push_back({b, label,
+                            analyze_branch(c.depth, c.force, b, context,
+                                           truth == truths.end() ? std::nullopt : std::optional(truth->second))});
+    } catch (const AnalysisError& e) {
+      throw InputError(c.curve_file.string(), "unloading " + label, e.what());
+    }
+  }
+  return c;
+}
+
+CurveAnalysis analyze_measured_curve(const fs::path& csv, const AnalysisSetup& setup) {
+  const LoadDepthCurve curve = read_curve_csv(csv, setup.columns);
+  CurveAnalysis c;
+  c.curve_file = csv;
+  c.scene = setup.scene;
+  c.punch = setup.punch;
+  c.settings = setup.analysis;
+  c.specimen_nu = setup.specimen_nu;
+  c.depth_unit = curve.depth_unit;
+  c.force_unit = curve.force_unit;
+  c.depth = curve.depth;
+  c.force = curve.force;
+  std::vector<CurveBranch> branches;
+  try {
+    branches = measured_unloading_branches(c.depth, c.force, c.settings, curve.rows);
+  } catch (const AnalysisError& e) {
+    throw InputError(csv.string(), "curve", e.what());
+  }
+  const auto punch = make_punch(c.punch);
+  const AnalysisContext context = context_of(c, *punch);
+  for (const CurveBranch& b : branches) {
+    const std::string label = fmt::format("rows {}-{}", curve.rows[b.peak], curve.rows[b.end]);
+    try {
+      c.branches.push_back({b, label, analyze_branch(c.depth, c.force, b, context)});
+    } catch (const AnalysisError& e) {
+      throw InputError(csv.string(), "unloading " + label, e.what());
+    }
+  }
+  return c;
+}
+
+nlohmann::ordered_json analysis_json(const CurveAnalysis& c) {
+  const auto punch = make_punch(c.punch);
+  const AnalysisContext context = context_of(c, *punch);
+  nlohmann::ordered_json j;
+  j["indentsim"] = version_line();
+  j["curve"] = c.curve_file.string();
+  j["origin"] = c.simulated ? "run" : "measured";
+  j["read_in"] = {{"depth", c.depth_unit}, {"force", c.force_unit}};
+  j["scene"] = to_string(c.scene);
+  j["indenter"] = indenter_json(c.punch, c.settings);
+  j["specimen_nu"] = c.specimen_nu ? nlohmann::ordered_json(*c.specimen_nu) : nlohmann::ordered_json(nullptr);
+  j["units"] = analysis_units(c.scene);
+  j["branches"] = nlohmann::ordered_json::array();
+  for (const auto& b : c.branches) {
+    nlohmann::ordered_json entry;
+    entry["where"] = b.label;
+    entry["index"] = {{"loading_start", b.branch.loading_start}, {"peak", b.branch.peak}, {"end", b.branch.end}};
+    entry.update(branch_json(b.result, context));
+    j["branches"].push_back(entry);
+  }
+  j["curve_si"] = {{"depth", c.depth}, {"force", c.force}};
+  return j;
+}
+
+std::string analysis_table(const CurveAnalysis& c) {
+  const bool axi = c.scene == SceneKind::axisymmetric;
+  const char* force = axi ? "N" : "N/m";
+  const char* stiffness = axi ? "N/m" : "N/m per m";
+  std::string t = fmt::format("{}: {} unloading branch{} ({}, {} indenter; SI units)\n", c.curve_file.string(),
+                              c.branches.size(), c.branches.size() == 1 ? "" : "es", to_string(c.scene),
+                              to_string(c.punch.shape));
+  const auto value = [](const std::optional<double>& v) { return v ? fmt::format("{:.5g}", *v) : std::string("-"); };
+  for (const auto& b : c.branches) {
+    const BranchAnalysis& a = b.result;
+    t += fmt::format("  {}: P_max = {:.5g} {}, h_max = {:.5g} m\n", b.label, a.P_max, force, a.h_max);
+    t += fmt::format("    fit P = B (h - h_f)^m over {:g}-{:g}% of P_max: m = {:.4g}, h_f = {:.5g} m, {} points, "
+                     "rms {:.2g}% of P_max\n",
+                     100 * c.settings.fit_range[0], 100 * c.settings.fit_range[1], a.fit.m, a.fit.h_f, a.fit.points,
+                     100 * a.fit.rms_residual);
+    t += fmt::format("    S = {:.5g} {} (exact: {})   h_c = {:.5g} m   {} = {:.5g} {}\n", a.fit.stiffness, stiffness,
+                     value(a.exact_stiffness), a.h_c, axi ? "A_c" : "2 r(h_c)", a.area, axi ? "m^2" : "m");
+    t += fmt::format("    H = {:.5g} Pa   E_r = {} Pa   E = {} Pa   W_e/W_t = {:.4g}\n", a.hardness,
+                     value(a.reduced_modulus), value(a.specimen_modulus),
+                     a.total_work > 0 ? a.elastic_work / a.total_work : 0.0);
+    if (a.true_area)
+      t += fmt::format("    true contact: radius {:.5g} m, H = {} Pa, E_r = {} Pa, pile-up ratio A_true/A_c = {}\n",
+                       *a.true_contact_radius, value(a.true_hardness), value(a.true_reduced_modulus),
+                       value(a.pile_up_ratio));
+    if (!axi) t += "    E_r: not defined in plane strain (a half-plane's compliance depends on the specimen size)\n";
+  }
+  return t;
+}
+
+}  // namespace indentsim
