@@ -16,6 +16,13 @@ OUTDIR/figures/:
                  lines from the local stiffness rows, markers from Gauss-point stresses
   plastic_zone   strain intensity e_u / e0 on the deformed mesh, the outline of the yielded region
                  and the punch where it stands (the paper's Fig. 6); the window follows the zone
+and, when `indentsim analyze OUTDIR` has written OUTDIR/analysis.json, analysis.png beside it.
+
+    indentsim analyze CURVE --plot            (or: python3 plots/plot_results.py --analysis FILE.json)
+
+draws an analysis.json: each unloading branch with its power-law fit, S as the tangent at h_max,
+h_f, h_c and h_max marked, and a table of the Oliver-Pharr numbers (with the true contact's for a
+run): FILE.png and FILE.svg beside it.
 Needs Debian's python3-matplotlib (installed by scripts/install-deps.sh).
 """
 import argparse
@@ -294,11 +301,96 @@ def plot_plastic_zone(case, name, row, fields, outdir):
     save(fig, outdir, "plastic_zone")
 
 
+def plot_analysis(path):
+    """The Oliver-Pharr analysis of analysis.json: each unloading branch with its power-law fit,
+    the stiffness S as the tangent at h_max, h_f, h_c and h_max marked, and the numbers beside."""
+    report = json.loads(path.read_text())
+    depth, force = report["curve_si"]["depth"], report["curve_si"]["force"]
+    axi = report["scene"] == "axisymmetric"
+    deepest = max(depth) if depth else 1.0
+    h_unit, h_scale = ("nm", 1e9) if deepest < 20e-6 else ("µm", 1e6)
+    peak = max(force) if force else 1.0
+    if axi:
+        p_unit, p_scale = ("mN", 1e3) if peak < 1.0 else ("N", 1.0)
+    else:
+        p_unit, p_scale = ("kN/m", 1e-3) if peak > 1e3 else ("N/m", 1.0)
+    branches = report["branches"]
+    fig, axes = plt.subplots(len(branches), 3, figsize=(15, 4.2 * len(branches)), squeeze=False,
+                             gridspec_kw={"width_ratios": [1, 1, 0.9]})
+    h = [d * h_scale for d in depth]
+    P = [f * p_scale for f in force]
+    for (whole, ax, table_ax), b in zip(axes, branches):
+        i0, ip, ie = b["index"]["loading_start"], b["index"]["peak"], b["index"]["end"]
+        fit = b["fit"]
+        h_f, h_max, P_max = fit["h_f"], b["h_max"], b["P_max"]
+        S = b["S_fit"]
+        lo, hi = fit["range"]
+        # Left: the whole curve, the branch's loading and unloading in their colours.
+        whole.plot(h, P, "-", lw=0.8, color="lightgray")
+        whole.plot(h[i0:ip + 1], P[i0:ip + 1], "-", lw=1.2, color="tab:blue", label="loading")
+        whole.plot(h[ip:ie + 1], P[ip:ie + 1], "-", lw=1.2, color="tab:orange", label="unloading")
+        whole.set_xlabel(f"depth h [{h_unit}]")
+        whole.set_ylabel(f"force P [{p_unit}]")
+        whole.set_title(f"{pathlib.Path(report['curve']).name}: unloading {b['where']}", fontsize=10)
+        whole.legend(fontsize=7, loc="upper left")
+        # Middle: the unloading branch, the fit over its range, S as the tangent at h_max (it
+        # meets the depth axis at h_max - P_max / S), and h_f, h_c, h_max.
+        ax.plot(h[ip:ie + 1], P[ip:ie + 1], "o", ms=3, color="tab:orange", label="unloading")
+        xs = [h_f + (h_max - h_f) * k / 100 for k in range(101)]
+        ax.plot([x * h_scale for x in xs], [fit["B"] * (x - h_f) ** fit["m"] * p_scale for x in xs], "-",
+                color="black", lw=1.2, label=f"P = B (h - h_f)^m, m = {fit['m']:.3g} (fit over {lo:g}-{hi:g} P_max)")
+        h0 = h_max - P_max / S
+        ax.plot([h0 * h_scale, h_max * h_scale], [0, P_max * p_scale], "--", color="tab:red", lw=1,
+                label=f"S = {S:.4g} {'N/m' if axi else 'N/m per m'}")
+        for k, (x, label) in enumerate(((h_f, "h_f"), (b["h_c"], "h_c"), (h_max, "h_max"))):
+            ax.axvline(x * h_scale, color="gray", ls=":", lw=0.8)
+            ax.annotate(label, (x * h_scale, P_max * p_scale * (1.03 + 0.05 * (k % 2))), ha="center", fontsize=8)
+        left = min(h_f, h0) - 0.1 * (h_max - min(h_f, h0))
+        ax.set_xlim(left * h_scale, (h_max + 0.05 * (h_max - left)) * h_scale)
+        ax.set_ylim(0, P_max * p_scale * 1.15)
+        ax.set_xlabel(f"depth h [{h_unit}]")
+        ax.set_ylabel(f"force P [{p_unit}]")
+        ax.legend(fontsize=7, loc="center left")
+        rows = [("P_max", f"{P_max * p_scale:.5g} {p_unit}"), ("h_max", f"{h_max * h_scale:.5g} {h_unit}"),
+                ("S (fit)", f"{S:.5g} N/m"), ("S (exact)", "-" if b["S_exact"] is None else f"{b['S_exact']:.5g} N/m"),
+                ("epsilon, beta", f"{b['epsilon']:g}, {b['beta']:g}"), ("h_c", f"{b['h_c'] * h_scale:.5g} {h_unit}"),
+                ("h_f", f"{h_f * h_scale:.5g} {h_unit}"),
+                ("A_c" if axi else "2 r(h_c)", f"{b['A_c']:.4g} {'m²' if axi else 'm'}"),
+                ("H", f"{b['H'] / 1e9:.4g} GPa"),
+                ("E_r", "not defined (plane strain)" if b["E_r"] is None and not axi
+                 else ("-" if b["E_r"] is None else f"{b['E_r'] / 1e9:.4g} GPa")),
+                ("E (specimen)", "-" if b["E"] is None else f"{b['E'] / 1e9:.4g} GPa"),
+                ("W_e / W_t", f"{b['W_e_over_W_t']:.3f}")]
+        if b["pile_up_ratio"] is not None:
+            rows += [("true contact radius", f"{b['true_contact_radius'] * h_scale:.5g} {h_unit}"),
+                     ("H (true area)", f"{b['true_H'] / 1e9:.4g} GPa"),
+                     ("E_r (true area)", "-" if b["true_E_r"] is None else f"{b['true_E_r'] / 1e9:.4g} GPa"),
+                     ("A_true / A_c", f"{b['pile_up_ratio']:.3f} ({'pile-up' if b['pile_up_ratio'] > 1 else 'sink-in'})")]
+        table_ax.axis("off")
+        table = table_ax.table(cellText=[[k, v] for k, v in rows], colLabels=["Oliver-Pharr", ""], loc="center",
+                               cellLoc="left", colWidths=[0.45, 0.55])
+        table.auto_set_font_size(False)
+        table.set_fontsize(8)
+        table.scale(1, 1.25)
+    fig.tight_layout()
+    stem = path.with_suffix("")
+    for suffix in ("png", "svg"):
+        fig.savefig(f"{stem}.{suffix}", dpi=150)
+    plt.close(fig)
+    print(f"wrote {stem}.png")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("outdir", type=pathlib.Path)
+    parser.add_argument("outdir", type=pathlib.Path, nargs="?")
     parser.add_argument("--step", type=int, help="the increment to show (default: the deepest of the load path)")
+    parser.add_argument("--analysis", type=pathlib.Path, help="draw this analysis.json (indentsim analyze) instead")
     args = parser.parse_args()
+    if args.analysis:
+        plot_analysis(args.analysis)
+        return
+    if args.outdir is None:
+        parser.error("give a run's folder or --analysis FILE")
     outdir = args.outdir
     case_text = (outdir / "case.toml").read_text()
     case = tomllib.loads(case_text)
@@ -322,6 +414,8 @@ def main():
         print(f"no layer view tabulated for step {step} (profiles.csv holds the deepest and the final state): "
               "no profiles figure")
     plot_plastic_zone(case, name, row, fields, figures)
+    if (outdir / "analysis.json").is_file():
+        plot_analysis(outdir / "analysis.json")
 
 
 if __name__ == "__main__":

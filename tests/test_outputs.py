@@ -14,6 +14,7 @@ Runs a small plastic case with fields at every increment, then checks that
 Prints 'N passed, N failed' and exits non-zero on any failure.
 """
 import csv
+import json
 import os
 import pathlib
 import subprocess
@@ -128,6 +129,22 @@ def main():
         plot = subprocess.run([str(executable), "plot", str(unloaded)], capture_output=True, text=True)
         check(plot.returncode == 0, f"indentsim plot (unloaded end) failed: {plot.stderr}")
         check("α = 50 µm" in (unloaded / "figures" / "pressure.svg").read_text(), "the pressure figure is not the peak's")
+
+        # indentsim analyze --plot: analysis.json and its figure (the fit, S, h_c and the table).
+        sphere = pathlib.Path(tmp) / "sphere"
+        run = subprocess.run([str(executable), "run", str(source / "loadcases" / "axisymmetric" / "elastic_sphere.toml"),
+                              "--quiet", "--out", str(sphere), "--set", "mesh.contact_nodes=8",
+                              "--set", "load.path=[0, 5e-6, 0]", "--set", "load.increments=[6, 10]"],
+                             capture_output=True, text=True)
+        check(run.returncode == 0, f"indentsim run (elastic sphere) failed: {run.stderr}")
+        analyze = subprocess.run([str(executable), "analyze", str(sphere), "--plot"], capture_output=True, text=True)
+        check(analyze.returncode == 0, f"indentsim analyze --plot failed: {analyze.stderr}")
+        report = json.loads((sphere / "analysis.json").read_text())
+        check(report["units"]["stress"] == "Pa" and len(report["branches"]) == 1, "analysis.json: units and one branch")
+        for suffix in ("png", "svg"):
+            figure = sphere / f"analysis.{suffix}"
+            check(figure.is_file() and figure.stat().st_size > 1000, f"analysis.{suffix} missing or empty")
+        check("Oliver-Pharr" in (sphere / "analysis.svg").read_text(), "the analysis figure has no table")
 
         with open(out / "layers.csv", newline="") as f:
             layers = list(csv.DictReader(f))
