@@ -21,6 +21,9 @@ struct CsvTable {
 CsvTable read_csv_table(const std::filesystem::path& file, std::size_t max_bytes,
                         const std::function<void(const std::string&)>& fail);
 
+/// A field without its surrounding blanks (spaces, tabs, line ends).
+std::string trim_csv_field(const std::string& text);
+
 /// A field as a finite number (surrounding blanks allowed); false for text, NaN or infinity.
 bool parse_csv_number(const std::string& text, double& value);
 

@@ -48,10 +48,14 @@ char detect_delimiter(const std::string& bytes) {
 
 }  // namespace
 
+std::string trim_csv_field(const std::string& text) {
+  const auto first = text.find_first_not_of(" \t\r\n");
+  if (first == std::string::npos) return "";
+  return text.substr(first, text.find_last_not_of(" \t\r\n") - first + 1);
+}
+
 bool parse_csv_number(const std::string& text, double& value) {
-  std::string trimmed = text;
-  trimmed.erase(0, trimmed.find_first_not_of(" \t"));
-  trimmed.erase(trimmed.find_last_not_of(" \t") + 1);
+  const std::string trimmed = trim_csv_field(text);
   if (trimmed.empty()) return false;
   char* end = nullptr;
   errno = 0;

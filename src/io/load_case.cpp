@@ -695,8 +695,9 @@ const std::vector<KeyDeclaration>& key_declarations() {
   return keys;
 }
 
-LoadCase parse_and_override(const std::string& text, const std::string& source,
-                            const std::vector<std::string>& overrides, const std::filesystem::path& base_dir) {
+/// The TOML text with the --set overrides applied; a syntax error names its line and column.
+toml::table parse_with_overrides(const std::string& text, const std::string& source,
+                                 const std::vector<std::string>& overrides) {
   toml::table root;
   try {
     root = toml::parse(text, source);
@@ -706,7 +707,12 @@ LoadCase parse_and_override(const std::string& text, const std::string& source,
                      fmt::format("not valid TOML: {}", e.description()));
   }
   for (const auto& o : overrides) apply_override(root, o, source);
-  return from_table(root, source, base_dir);
+  return root;
+}
+
+LoadCase parse_and_override(const std::string& text, const std::string& source,
+                            const std::vector<std::string>& overrides, const std::filesystem::path& base_dir) {
+  return from_table(parse_with_overrides(text, source, overrides), source, base_dir);
 }
 
 }  // namespace
@@ -976,16 +982,7 @@ LoadCase read_load_case(const std::filesystem::path& file, const std::vector<std
 AnalysisSetup read_analysis_setup(const std::optional<std::filesystem::path>& file,
                                   const std::vector<std::string>& overrides) {
   const std::string source = file ? file->string() : std::string("--set");
-  const std::string text = file ? read_text(*file) : std::string();
-  toml::table root;
-  try {
-    root = toml::parse(text, source);
-  } catch (const toml::parse_error& e) {
-    const auto& where = e.source().begin;
-    throw InputError(source, fmt::format("line {}, column {}", where.line, where.column),
-                     fmt::format("not valid TOML: {}", e.description()));
-  }
-  for (const auto& o : overrides) apply_override(root, o, source);
+  const toml::table root = parse_with_overrides(file ? read_text(*file) : std::string(), source, overrides);
 
   // The load-case keys an analysis reads (the indenter, its scene, Oliver-Pharr's constants and
   // the specimen's Poisson's ratio), none required, and the [curve] keys of a measured file.
