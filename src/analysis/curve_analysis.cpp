@@ -69,6 +69,22 @@ nlohmann::ordered_json indenter_json(const PunchInput& p, const AnalysisInput& s
   return j;
 }
 
+/// Analyses each branch into c.branches, labelled for messages; a branch that cannot be analysed
+/// is an InputError naming the curve's file and the branch.
+template <class Label, class Truth>
+void analyze_branches(CurveAnalysis& c, const std::vector<CurveBranch>& branches, Label label_of, Truth truth_of) {
+  const auto punch = make_punch(c.punch);
+  const AnalysisContext context = context_of(c, *punch);
+  for (const CurveBranch& b : branches) {
+    const std::string label = label_of(b);
+    try {
+      c.branches.push_back({b, label, analyze_branch(c.depth, c.force, b, context, truth_of(b))});
+    } catch (const AnalysisError& e) {
+      throw InputError(c.curve_file.string(), "unloading " + label, e.what());
+    }
+  }
+}
+
 }  // namespace
 
 bool is_run_output(const fs::path& path) {
@@ -110,20 +126,13 @@ CurveAnalysis analyze_run_curve(const fs::path& path, const std::vector<std::str
     throw InputError(c.curve_file.string(), "curve",
                      "has no unloading branch: the run's load path never turns back (load.path)");
   const auto truths = recorded_truths(dir / "summary.json");
-  const auto punch = make_punch(c.punch);
-  const AnalysisContext context = context_of(c, *punch);
-  for (const CurveBranch& b : branches) {
-    // curve.csv holds one row per step from 0: the index is the step.
-    const std::string label = fmt::format("steps {}-{}", b.peak, b.end);
-    const auto truth = truths.find(b.peak);
-    try {
-      c.branches.push_back({b, label,
-                            analyze_branch(c.depth, c.force, b, context,
-                                           truth == truths.end() ? std::nullopt : std::optional(truth->second))});
-    } catch (const AnalysisError& e) {
-      throw InputError(c.curve_file.string(), "unloading " + label, e.what());
-    }
-  }
+  // curve.csv holds one row per step from 0: the index is the step.
+  analyze_branches(c, branches, [](const CurveBranch& b) { return fmt::format("steps {}-{}", b.peak, b.end); },
+                   [&](const CurveBranch& b) -> std::optional<TrueContact> {
+                     const auto truth = truths.find(b.peak);
+                     if (truth == truths.end()) return std::nullopt;
+                     return truth->second;
+                   });
   return c;
 }
 
@@ -145,16 +154,10 @@ CurveAnalysis analyze_measured_curve(const fs::path& csv, const AnalysisSetup& s
   } catch (const AnalysisError& e) {
     throw InputError(csv.string(), "curve", e.what());
   }
-  const auto punch = make_punch(c.punch);
-  const AnalysisContext context = context_of(c, *punch);
-  for (const CurveBranch& b : branches) {
-    const std::string label = fmt::format("rows {}-{}", curve.rows[b.peak], curve.rows[b.end]);
-    try {
-      c.branches.push_back({b, label, analyze_branch(c.depth, c.force, b, context)});
-    } catch (const AnalysisError& e) {
-      throw InputError(csv.string(), "unloading " + label, e.what());
-    }
-  }
+  analyze_branches(
+      c, branches,
+      [&](const CurveBranch& b) { return fmt::format("rows {}-{}", curve.rows[b.peak], curve.rows[b.end]); },
+      [](const CurveBranch&) -> std::optional<TrueContact> { return std::nullopt; });
   return c;
 }
 
