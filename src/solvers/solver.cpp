@@ -176,6 +176,7 @@ struct NewtonSolver::Impl {
   std::vector<double> residual_history;
   ActiveSetHistory active_sets;
   bool cycling = false;
+  bool stop_on_cycling = true;
   // Chord steps (see jacobian_callback): the active set and residual at the last factorization.
   bool chord_allowed = false, factored = false;
   std::uint64_t factored_signature = 0;
@@ -255,13 +256,14 @@ struct NewtonSolver::Impl {
     std::copy(pattern.column_start().begin(), pattern.column_start().end(), SUNSparseMatrix_IndexPointers(j));
     std::copy(pattern.row_index().begin(), pattern.row_index().end(), SUNSparseMatrix_IndexValues(j));
     me->equations.jacobian(N_VGetArrayPointer(u), me->alpha, SUNSparseMatrix_Data(j));
-    // A cycling active set stops this attempt (recoverable): the caller damps it with a line
-    // search, then cuts the increment back.
+    // A cycling active set stops the plain attempt (recoverable): the caller repeats the trial
+    // with KINSOL's line search, whose damped steps break the cycle, and cuts the increment back
+    // only if that fails too.
     const double* f = N_VGetArrayPointer(fu);
     double norm = 0.0;
     for (sunindextype i = 0; i < N_VGetLength(fu); ++i) norm = std::max(norm, std::abs(f[i]));
     const std::uint64_t signature = me->equations.active_set_signature();
-    if (me->active_sets.record(signature, norm)) {
+    if (me->active_sets.record(signature, norm) && me->stop_on_cycling) {
       me->cycling = true;
       return 1;
     }
@@ -314,6 +316,7 @@ NewtonReport NewtonSolver::solve(double alpha, std::vector<double>& u, Globaliza
   std::copy(u.begin(), u.end(), data);
   m.active_sets.clear();
   m.cycling = false;
+  m.stop_on_cycling = globalization == Globalization::none;
   m.chord_allowed = m.settings.chord_steps && globalization == Globalization::none;
   m.factored = false;
   m.previous_norm = 0.0;
