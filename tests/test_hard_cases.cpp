@@ -85,23 +85,27 @@ TEST(HardCases, NearlyIncompressibleBbarConvergesWherePlainQ1Locks) {
     return run_hard("incompressible.toml", {std::string("mesh.element=") + element,
                                             "mesh.contact_nodes=" + std::to_string(n), "solver.linear=auto"});
   };
-  const HardRun q1_8 = run("q1", 8), q1_16 = run("q1", 16), bbar_8 = run("bbar", 8), bbar_16 = run("bbar", 16);
-  const double e_q1_8 = hertz_error(q1_8), e_q1_16 = hertz_error(q1_16);
-  const double e_b_8 = hertz_error(bbar_8), e_b_16 = hertz_error(bbar_16);
-  RecordProperty("hertz_error_q1_8_16_bbar_8_16", fmt::format("{:.4f} {:.4f} {:.4f} {:.4f}", e_q1_8, e_q1_16, e_b_8, e_b_16));
-  EXPECT_LT(e_b_16, 0.01);
-  EXPECT_LT(e_b_16, e_b_8);
-  EXPECT_GT(e_q1_16, 0.05);          // locked: still far off at the default-like mesh
-  EXPECT_GT(e_q1_8, 5 * e_b_8);
-  EXPECT_GT(e_q1_16, 5 * e_b_16);
+  // At half and at the default resolution (mesh.contact_nodes = 20).  P(a) also carries the
+  // contact edge's own first-order error (include/indentsim/contact.hpp), about 0.5% at 20 nodes.
+  const HardRun q1_10 = run("q1", 10), q1_20 = run("q1", 20), bbar_10 = run("bbar", 10), bbar_20 = run("bbar", 20);
+  const double e_q1_10 = hertz_error(q1_10), e_q1_20 = hertz_error(q1_20);
+  const double e_b_10 = hertz_error(bbar_10), e_b_20 = hertz_error(bbar_20);
+  RecordProperty("hertz_error_q1_10_20_bbar_10_20",
+                 fmt::format("{:.4f} {:.4f} {:.4f} {:.4f}", e_q1_10, e_q1_20, e_b_10, e_b_20));
+  EXPECT_LT(e_b_20, 0.01);
+  EXPECT_LT(e_b_20, e_b_10);
+  EXPECT_GT(e_q1_20, 0.05);          // locked: still far off at the default mesh
+  EXPECT_GT(e_q1_10, 5 * e_b_10);
+  EXPECT_GT(e_q1_20, 5 * e_b_20);
   EXPECT_EQ(run_hard("incompressible.toml").element, ElementKind::bbar);  // "auto" picks it
-  expect_physics(bbar_16, 8);
+  expect_physics(bbar_20, 8);
 }
 
 TEST(HardCases, NearlyIncompressibleAcrossPoissonRatios) {
   for (const char* nu : {"0.49", "0.4999"}) {
     SCOPED_TRACE(nu);
-    const HardRun h = run_hard("incompressible.toml", {std::string("material.nu=") + nu, "solver.linear=auto"});
+    const HardRun h = run_hard("incompressible.toml",
+                               {std::string("material.nu=") + nu, "solver.linear=auto", "mesh.contact_nodes=20"});
     EXPECT_EQ(h.element, ElementKind::bbar);
     EXPECT_LT(hertz_error(h), 0.01);
     expect_physics(h, 8);

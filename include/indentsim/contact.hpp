@@ -67,24 +67,32 @@ struct ContactResult {
   int outermost = -1;          ///< index (into candidates) of the outermost contact node
   std::vector<double> nodal_force;  ///< lambda_k >= 0 per candidate [N/m or N]
   std::vector<char> in_contact;     ///< per candidate
+  std::vector<double> gap;          ///< d_k = g_k - alpha - v_k per candidate (0 on contact) [m]
 };
 
 /// Evaluates the contact state from the free-equation displacement u and internal force K u.
 ContactResult evaluate_contact(const ContactBoundary& boundary, const double* u, const double* internal_force,
                                double alpha);
 
-/// Contact half-width (radius) from the discrete solution.  A flat punch's contact ends at its
-/// rim once the outermost candidate (the rim node) touches.  For a smooth punch the edge lies between the outermost contact
-/// node x_n and the first open node x_{n+1}; the nodal pressures p_k = lambda_k / w_k (w_k the
-/// tributary width) next to it locate it.  Near the edge of a smooth punch the pressure has the
-/// square-root form p^2 ~ C (a^2 - x^2) (exact for Hertz, first-order for any smooth edge, the
-/// cone's arccosh(a/r) included), so a
-/// least-squares line p^2 = A + B x^2 through the contact nodes n-5 .. n-1 gives a^2 = -A/B
-/// (pressures taken relative to the largest of them, so the fit does not depend on units).
-/// Node n itself is left out: its tributary strip is partly open.  The estimate is confined to
-/// [x_{n-1}, x_{n+1}] (an outermost node may carry a sliver of force with the continuous edge
-/// just inside it); with too few contact nodes it falls back to the middle of [x_n, x_{n+1}].
-/// Consistent: the fitted nodes are within 6 elements of the edge, so it converges as h -> 0.
+/// Contact half-width (radius) a from the discrete solution, resolved inside the element where the
+/// active set ends.  A flat punch's contact ends at its rim once the outermost candidate (the rim
+/// node) touches.  For a smooth punch the edge lies between the outermost contact node x_n and
+/// the first open node x_{n+1}, and the open side locates it: next to the edge of any frictionless
+/// contact of a smooth punch the surface is locally that of a half-space under a square-root
+/// pressure, p ~ K (a - x)^{1/2} inside, and the gap opens as d ~ (4K / 3E') (x - a)^{3/2} outside
+/// (the half-plane under a square-root load: the contact edge as a crack tip; Hertz's line contact
+/// expands to exactly this, d = (2 sqrt 2 / 3) (a^2 / R) ((x - a) / a)^{3/2}).  It holds for
+/// Hertz and Sneddon's cone alike, and, unlike the interior pressure profile, for plastic contact, whose pressure is
+/// nearly uniform inside: only the width of the square-root layer shrinks, not the gap's law.  So
+/// y_k = d_k^{2/3} is linear in x, y = c (x - a), over the first open nodes n+1 .. n+3, and a
+/// weighted least-squares line through them gives a where y = 0.  The residuals are weighted by y_k
+/// itself: the discrete gap is least accurate next to the edge (its neighbour x_n is pinned to the
+/// punch) and more accurate away from it.  Gaps are taken relative to the largest, x relative to
+/// x_{n+1} in units of the element, so the fit is the same in any units.  No node position enters
+/// the result as a bound: an extrapolation that contradicts the active set (outside
+/// (x_{n-1}, x_{n+1})) or a fit without an opening gap falls back to the middle of [x_n, x_{n+1}].
+/// Consistent: the fitted nodes are within 3 elements of the edge; measured convergence in
+/// tests/test_contact_edge.cpp and docs/DESIGN.md §4.
 double contact_half_width(const ContactBoundary& boundary, const ContactResult& contact);
 
 }  // namespace indentsim

@@ -33,11 +33,13 @@ ContactResult evaluate_contact(const ContactBoundary& boundary, const double* u,
   ContactResult r;
   r.nodal_force.assign(cs.size(), 0.0);
   r.in_contact.assign(cs.size(), 0);
+  r.gap.assign(cs.size(), 0.0);
   double half_model_force = 0.0;
   for (std::size_t k = 0; k < cs.size(); ++k) {
     const double fk = internal_force[cs[k].equation];
     const bool on = ContactBoundary::active(cs[k], fk, u[cs[k].equation], alpha);
     r.in_contact[k] = on;
+    r.gap[k] = on ? 0.0 : cs[k].surface_height - alpha - u[cs[k].equation];
     // docs/MODEL.md §3: P is the sum of the vertical reactions of all contact nodes, the axis node
     // included, times the symmetry factor (twice, for the half model of plane strain).  Open nodes carry no force (their residual is the
     // equilibrium residual itself), so summing -r_k over contact nodes is the reaction.
@@ -55,43 +57,44 @@ ContactResult evaluate_contact(const ContactBoundary& boundary, const double* u,
 double contact_half_width(const ContactBoundary& boundary, const ContactResult& contact) {
   const auto& cs = boundary.candidates();
   const int n = contact.outermost;
+  const int candidates = static_cast<int>(cs.size());
   // No force, no contact zone: at alpha = 0 the punch touches the axis node only.
   if (n < 0 || !(contact.force > 0.0)) return 0.0;
   const double x_n = cs[n].x;
-  if (n + 1 >= static_cast<int>(cs.size())) return x_n;  // the rim node of a flat punch touches
+  if (n + 1 >= candidates) return x_n;  // the rim node of a flat punch touches
   const double x_open = cs[n + 1].x;
-
-  // Least squares of p^2 = A + B x^2 over the contact nodes just inside the edge.  The pressure
-  // is taken relative to the largest of them and x relative to x_open, so that the fit is the same
-  // in any units (p^2 of a pressure in pascals overflows for E near 1e160 and underflows for small E).
-  double p_scale = 0.0;
-  for (int k = std::max(0, n - 5); k < n; ++k)
-    if (contact.in_contact[k] && cs[k].tributary_measure > 0.0)
-      p_scale = std::max(p_scale, std::abs(contact.nodal_force[k] / cs[k].tributary_measure));
-  double s1 = 0, sx = 0, sxx = 0, sy = 0, sxy = 0;
-  int used = 0;
-  for (int k = std::max(0, n - 5); k < n; ++k) {
-    if (!contact.in_contact[k] || !(cs[k].tributary_measure > 0.0) || !(p_scale > 0.0)) continue;
-    const double p = contact.nodal_force[k] / cs[k].tributary_measure / p_scale;
-    const double x2 = cs[k].x * cs[k].x, p2 = p * p;
-    s1 += 1;
-    sx += x2;
-    sxx += x2 * x2;
-    sy += p2;
-    sxy += x2 * p2;
-    ++used;
-  }
   const double midpoint = 0.5 * (x_n + x_open);
-  if (used < 2) return midpoint;
-  const double det = s1 * sxx - sx * sx;
+
+  // The first open nodes (up to three; fewer where the punch's surface ends).
+  const int last = std::min(candidates - 1, n + 3);
+  if (last < n + 2) return midpoint;
+  double gap_scale = 0.0;
+  for (int k = n + 1; k <= last; ++k) gap_scale = std::max(gap_scale, contact.gap[k]);
+  if (!(gap_scale > 0.0)) return midpoint;
+  const double element = cs[n + 2].x - x_open;
+
+  // Weighted least squares of y = c (xi - xi_a), xi = (x - x_{n+1}) / element, weights y_k on the
+  // residuals (w_k = y_k^2 on their squares).
+  double sw = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
+  for (int k = n + 1; k <= last; ++k) {
+    const double y = std::cbrt(std::pow(std::max(contact.gap[k], 0.0) / gap_scale, 2));
+    const double xi = (cs[k].x - x_open) / element, w = y * y;
+    sw += w;
+    sx += w * xi;
+    sy += w * y;
+    sxx += w * xi * xi;
+    sxy += w * xi * y;
+  }
+  const double det = sw * sxx - sx * sx;
   if (!(det > 0.0)) return midpoint;
-  const double slope = (s1 * sxy - sx * sy) / det;
-  const double intercept = (sy - slope * sx) / s1;
-  if (!(slope < 0.0) || !(intercept > 0.0)) return midpoint;
-  // The discrete edge may also fall just inside x_n: an outermost node carrying a sliver of
-  // force is on the active set although the continuous edge has not quite reached it.
+  const double slope = (sw * sxy - sx * sy) / det;
+  const double intercept = (sy - slope * sx) / sw;
+  if (!(slope > 0.0)) return midpoint;  // the gap does not open outward: no edge law to follow
+  const double a = x_open - intercept / slope * element;
+  // The active set says the edge is beyond x_{n-1} (node n carries force) and before x_{n+1}.
   const double x_inner = n > 0 ? cs[n - 1].x : 0.0;
-  return std::clamp(std::sqrt(-intercept / slope), x_inner, x_open);
+  if (!(a > x_inner && a < x_open)) return midpoint;
+  return a;
 }
 
 }  // namespace indentsim
