@@ -86,7 +86,7 @@ TEST(HardCases, NearlyIncompressibleBbarConvergesWherePlainQ1Locks) {
                                             "mesh.contact_nodes=" + std::to_string(n), "solver.linear=auto"});
   };
   // At half and at the default resolution (mesh.contact_nodes = 20).  P(a) also carries the
-  // contact edge's own first-order error (include/indentsim/contact.hpp), about 0.5% at 20 nodes.
+  // contact edge's own discretisation error (docs/DESIGN.md §4): 1.0% at 16 nodes, 0.5% at 20.
   const HardRun q1_10 = run("q1", 10), q1_20 = run("q1", 20), bbar_10 = run("bbar", 10), bbar_20 = run("bbar", 20);
   const double e_q1_10 = hertz_error(q1_10), e_q1_20 = hertz_error(q1_20);
   const double e_b_10 = hertz_error(bbar_10), e_b_20 = hertz_error(bbar_20);

@@ -17,7 +17,7 @@ using indentsim::testing::slurp;
 using indentsim::testing::source_path;
 
 TEST(PlasticContactWidth, LiesBetweenTheNeighboursOfTheOutermostContactNode) {
-  // a is estimated from the pressure near the edge (docs/DESIGN.md §4); whatever the estimate, the
+  // a is resolved from the opening gap next to the edge (docs/DESIGN.md §4); whatever the estimate, the
   // edge of the discrete contact zone lies between the last node but one in contact and the first
   // open node.  Checked on both plastic models, from the mesh coordinates and the contact count.
   for (const char* model : {"ilyushin", "j2"}) {
