@@ -44,13 +44,15 @@ public:
   /// The body's force over the modelled part's nodal forces (Kinematics::symmetry_factor).
   double symmetry_factor() const { return symmetry_factor_; }
 
+  /// v + alpha - g: how far the node is past the punch's surface (minus the gap d) [m].
+  static double penetration(const ContactCandidate& c, double v, double alpha) { return v + alpha - c.surface_height; }
   /// The active branch of the complementarity function (ties count as contact).
   static bool active(const ContactCandidate& c, double internal_force, double v, double alpha) {
-    return c.scale * (v + alpha - c.surface_height) >= internal_force;
+    return c.scale * penetration(c, v, alpha) >= internal_force;
   }
   static double complementarity(const ContactCandidate& c, double internal_force, double v, double alpha) {
-    const double penetration = c.scale * (v + alpha - c.surface_height);
-    return penetration >= internal_force ? penetration : internal_force;
+    const double scaled = c.scale * penetration(c, v, alpha);
+    return scaled >= internal_force ? scaled : internal_force;
   }
 
 private:

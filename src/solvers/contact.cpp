@@ -39,7 +39,7 @@ ContactResult evaluate_contact(const ContactBoundary& boundary, const double* u,
     const double fk = internal_force[cs[k].equation];
     const bool on = ContactBoundary::active(cs[k], fk, u[cs[k].equation], alpha);
     r.in_contact[k] = on;
-    r.gap[k] = on ? 0.0 : cs[k].surface_height - alpha - u[cs[k].equation];
+    r.gap[k] = on ? 0.0 : -ContactBoundary::penetration(cs[k], u[cs[k].equation], alpha);
     // docs/MODEL.md §3: P is the sum of the vertical reactions of all contact nodes, the axis node
     // included, times the symmetry factor (twice, for the half model of plane strain).  Open nodes carry no force (their residual is the
     // equilibrium residual itself), so summing -r_k over contact nodes is the reaction.
@@ -77,7 +77,8 @@ double contact_half_width(const ContactBoundary& boundary, const ContactResult& 
   // residuals (w_k = y_k^2 on their squares).
   double sw = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
   for (int k = n + 1; k <= last; ++k) {
-    const double y = std::cbrt(std::pow(std::max(contact.gap[k], 0.0) / gap_scale, 2));
+    const double relative_gap = std::max(contact.gap[k], 0.0) / gap_scale;
+    const double y = std::cbrt(relative_gap * relative_gap);
     const double xi = (cs[k].x - x_open) / element, w = y * y;
     sw += w;
     sx += w * xi;
