@@ -18,6 +18,7 @@
 #include <Eigen/Core>
 
 #include "indentsim/load_case.hpp"
+#include "indentsim/material_parameter.hpp"
 
 namespace indentsim {
 
@@ -72,6 +73,13 @@ public:
   double stress_intensity(double e_u) const { return 3.0 * lame_.mu * (1.0 - omega(e_u)) * e_u; }
 
   SecantResponse respond(const VoigtVector& strain) const;
+
+  /// d omega / d theta at fixed e_u for theta = e0, kappa or n (0 below the elastic limit and for
+  /// any other parameter): the hardening law's own dependence, for forward sensitivities.
+  double omega_parameter_derivative(double e_u, MaterialParameter parameter) const;
+  /// d sigma / d theta of the secant law at fixed strain for theta = e0, kappa or n: only the
+  /// deviatoric part depends on them, d sigma / d theta = -2 mu (d omega / d theta) e.
+  VoigtVector stress_parameter_derivative(const VoigtVector& strain, MaterialParameter parameter) const;
 
   double elastic_limit() const { return e0_; }
   const LameConstants& lame() const { return lame_; }

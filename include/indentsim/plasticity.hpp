@@ -9,6 +9,7 @@
 // the result is the elastic model's.  Inelastic elements are integrated with 2x2 Gauss points:
 // stresses for the residual, consistent tangents for the Jacobian.
 #include <memory>
+#include <optional>
 #include <unordered_map>
 #include <vector>
 
@@ -33,6 +34,13 @@ public:
   /// True when the point responds exactly elastically at `strain` (no yielding, no history).
   virtual bool elastic(std::size_t point, const VoigtVector& strain) const = 0;
   virtual PointResponse respond(std::size_t point, const VoigtVector& strain) const = 0;
+  /// d sigma / d theta at fixed strain and fixed history, for theta = e0, kappa or n; nullopt when
+  /// the stress depends on the parameter through the history as well (then only finite
+  /// differences of whole runs give the sensitivity).
+  virtual std::optional<VoigtVector> stress_parameter_derivative(std::size_t /*point*/, const VoigtVector& /*strain*/,
+                                                                 MaterialParameter /*parameter*/) const {
+    return std::nullopt;
+  }
   /// Accepts `strain` as the converged state of the point.
   virtual void commit(std::size_t point, const VoigtVector& strain) = 0;
   /// The point has yielded at some time.
@@ -59,6 +67,10 @@ public:
   IlyushinPointLaw(const IlyushinLaw& law, bool unloading_rule, std::size_t points);
   bool elastic(std::size_t point, const VoigtVector& strain) const override;
   PointResponse respond(std::size_t point, const VoigtVector& strain) const override;
+  /// On loading the secant law has no history; on the unloading branch the peak strain eps* is
+  /// itself a function of the parameters (nullopt).
+  std::optional<VoigtVector> stress_parameter_derivative(std::size_t point, const VoigtVector& strain,
+                                                         MaterialParameter parameter) const override;
   void commit(std::size_t point, const VoigtVector& strain) override;
   bool has_yielded(std::size_t point) const override { return peak_intensity_[point] > law_.elastic_limit(); }
   void set_loading(bool beyond_previous_peak) override { loading_ = !unloading_rule_ || beyond_previous_peak; }
@@ -124,6 +136,12 @@ public:
   void add_tangent_corrections(const std::vector<ElementSlot>& slots, const double* u, double* values) const;
   /// True if a Gauss point of element (ei, ej) is inelastic at u (free-equation vector).
   bool inelastic_at(int ei, int ej, const double* u) const;
+  /// Adds d f_int / d theta at fixed u (theta = e0, kappa or n) over the slots' elements to df;
+  /// false (df then unusable) when the law cannot give it at this state (PointLaw).
+  bool add_parameter_derivative(const std::vector<ElementSlot>& slots, const double* u, MaterialParameter parameter,
+                                double* df) const;
+  /// The whole mesh's element slots (its free-equation system).
+  const std::vector<ElementSlot>& slots() const { return slots_; }
 
 private:
   /// The four Gauss-point tangents of an inelastic element at its unknowns ue, from the force pass.

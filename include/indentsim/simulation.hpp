@@ -15,6 +15,7 @@
 #include "indentsim/layer_forces.hpp"
 #include "indentsim/load_case.hpp"
 #include "indentsim/load_stepping.hpp"
+#include "indentsim/material_parameter.hpp"
 #include "indentsim/mesh.hpp"
 #include "indentsim/phase_times.hpp"
 #include "indentsim/plasticity.hpp"
@@ -94,6 +95,15 @@ public:
   /// after separation, the residual depth of the imprint where the punch left it.
   double free_surface_depth() const;
   std::vector<LayerForce> layer_forces() const;
+  /// dP/d(theta) at the current state for each parameter, by forward sensitivity through the
+  /// converged Newton system: at fixed depth F(u(theta); theta) = 0, so J du/d(theta) =
+  /// -dF/d(theta) (one factorization of J at u, one solve per parameter), and P = -f sum r_k over
+  /// the contact nodes moves with dr_k = dF_k/d(theta) + K_t du/d(theta).  Available for the elastic
+  /// model and for Ilyushin's law while loading, for E, e0, yield_stress, kappa and n (E at fixed
+  /// e0, or at fixed yield_stress when the load case gives the material that way); nullopt
+  /// otherwise (nu, J2's history, Ilyushin's unloading branch): finite differences of whole runs
+  /// are then the way.  Counts its factorization.
+  std::optional<std::vector<double>> force_sensitivities(const std::vector<MaterialParameter>& parameters);
   long symbolic_analyses() const {
     return retired_symbolic_analyses_ + (newton_ ? newton_->total_symbolic_analyses() : 0);
   }

@@ -116,6 +116,11 @@ public:
   NewtonReport solve(double alpha, std::vector<double>& u, Globalization globalization = Globalization::none,
                      int max_iterations = 0);
 
+  /// Solves J(u) x = b in place for each right-hand side, J the generalized Jacobian of the
+  /// equations at u (with the contact set active at u): the forward sensitivities of a converged
+  /// state.  One numeric factorization (counted), reusing the symbolic analysis.
+  void solve_linearized(const std::vector<double>& u, double alpha, std::vector<std::vector<double>>& right_hand_sides);
+
   long total_factorizations() const;
   long total_symbolic_analyses() const;
 

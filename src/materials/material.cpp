@@ -51,6 +51,29 @@ double IlyushinLaw::omega_derivative(double e_u) const {
   return law_ == HardeningLaw::linear ? kappa_ * ratio / e_u : (1.0 - n_) * std::pow(ratio, 1.0 - n_) / e_u;
 }
 
+double IlyushinLaw::omega_parameter_derivative(double e_u, MaterialParameter parameter) const {
+  if (e_u <= e0_) return 0.0;
+  const double ratio = e0_ / e_u;
+  if (law_ == HardeningLaw::linear) {
+    // omega = kappa (1 - e0 / e_u)
+    if (parameter == MaterialParameter::kappa) return 1.0 - ratio;
+    if (parameter == MaterialParameter::e0) return -kappa_ / e_u;
+    return 0.0;
+  }
+  // omega = 1 - (e0 / e_u)^(1 - n)
+  if (parameter == MaterialParameter::e0) return -(1.0 - n_) * std::pow(ratio, -n_) / e_u;
+  if (parameter == MaterialParameter::n) return std::pow(ratio, 1.0 - n_) * std::log(ratio);
+  return 0.0;
+}
+
+VoigtVector IlyushinLaw::stress_parameter_derivative(const VoigtVector& strain, MaterialParameter parameter) const {
+  const double d_omega = omega_parameter_derivative(strain_intensity(strain), parameter);
+  if (d_omega == 0.0) return VoigtVector::Zero();
+  const double trace = strain[0] + strain[1] + strain[3];
+  const VoigtVector deviator(strain[0] - trace / 3.0, strain[1] - trace / 3.0, 0.5 * strain[2], strain[3] - trace / 3.0);
+  return -2.0 * lame_.mu * d_omega * deviator;
+}
+
 SecantResponse IlyushinLaw::respond(const VoigtVector& strain) const {
   SecantResponse r;
   const double mu = lame_.mu;

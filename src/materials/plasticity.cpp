@@ -39,6 +39,12 @@ PointResponse IlyushinPointLaw::respond(std::size_t point, const VoigtVector& st
   return r;
 }
 
+std::optional<VoigtVector> IlyushinPointLaw::stress_parameter_derivative(std::size_t, const VoigtVector& strain,
+                                                                         MaterialParameter parameter) const {
+  if (!loading_) return std::nullopt;
+  return law_.stress_parameter_derivative(strain, parameter);
+}
+
 void IlyushinPointLaw::commit(std::size_t point, const VoigtVector& strain) {
   if (!loading_) return;
   peak_strain_[point] = strain;
@@ -189,6 +195,29 @@ void InelasticBulk::add_tangent_corrections(const std::vector<ElementSlot>& slot
     for (int p = 0; p < 64; ++p)
       if (slot.positions[p] >= 0) values[slot.positions[p]] += correction(p / 8, p % 8);
   }
+}
+
+bool InelasticBulk::add_parameter_derivative(const std::vector<ElementSlot>& slots, const double* u,
+                                             MaterialParameter parameter, double* df) const {
+  ElementVector ue;
+  std::array<VoigtVector, 4> strains, stress_derivatives;
+  for (const ElementSlot& slot : slots) {
+    for (int a = 0; a < 8; ++a) ue[a] = slot.unknowns[a] < 0 ? 0.0 : u[slot.unknowns[a]];
+    // An element elastic at u has sigma = D eps at all four points: no dependence on e0, kappa, n.
+    if (!inelastic(slot.ei, slot.ej, ue, strains)) continue;
+    const std::size_t first = 4 * static_cast<std::size_t>(mesh_.element(slot.ei, slot.ej));
+    for (std::size_t g = 0; g < 4; ++g) {
+      const std::optional<VoigtVector> d = law_->stress_parameter_derivative(first + g, strains[g], parameter);
+      if (!d) return false;
+      stress_derivatives[g] = *d;
+    }
+    // f_e = int B^T sigma is linear in the stresses (B-bar included).
+    const ElementVector d_force =
+        mesh_.kinematics().internal_force(mesh_.rectangle(slot.ei, slot.ej), stress_derivatives, mesh_.element_kind());
+    for (int a = 0; a < 8; ++a)
+      if (slot.unknowns[a] >= 0) df[slot.unknowns[a]] += d_force[a];
+  }
+  return true;
 }
 
 void InelasticBulk::internal_force(const double* u, double* f) {

@@ -475,6 +475,73 @@ double Simulation::free_surface_depth() const {
   return depth;
 }
 
+std::optional<std::vector<double>> Simulation::force_sensitivities(const std::vector<MaterialParameter>& parameters) {
+  const MaterialInput& m = load_case_.material;
+  for (MaterialParameter p : parameters)
+    if (p == MaterialParameter::nu) return std::nullopt;  // nu also shapes the condensed far field
+  std::vector<double> u_system;
+  to_system(u_, u_system);
+  const std::size_t n = u_system.size();
+  BulkOperator& bulk = system_bulk();
+  const ContactBoundary& contact = condensation_ ? condensation_->contact() : *contact_;
+  const StiffnessPattern& pattern = equations_->pattern();
+  std::vector<double> force(n);
+  bulk.internal_force(u_system.data(), force.data());
+
+  // dF/d(theta) at fixed u for the model's own parameters: E at fixed e0 scales every stress
+  // (f_int is homogeneous of degree one in E, far field included); e0, kappa and n act only
+  // through omega in the inelastic near elements.
+  const std::vector<MaterialParameter> base{MaterialParameter::E, MaterialParameter::e0, MaterialParameter::kappa,
+                                            MaterialParameter::n};
+  std::vector<std::vector<double>> d_force(base.size(), std::vector<double>(n, 0.0));
+  for (std::size_t i = 0; i < n; ++i) d_force[0][i] = force[i] / m.E;
+  if (plastic_) {
+    const std::vector<ElementSlot>& slots = condensation_ ? condensation_->elements() : plastic_->slots();
+    for (std::size_t b = 1; b < base.size(); ++b)
+      if (!plastic_->add_parameter_derivative(slots, u_system.data(), base[b], d_force[b].data())) return std::nullopt;
+  }
+  // Right-hand sides -dF/d(theta): an active contact row c (v + alpha - g) does not depend on theta.
+  const auto& candidates = contact.candidates();
+  std::vector<char> active(candidates.size());
+  for (std::size_t k = 0; k < candidates.size(); ++k)
+    active[k] = ContactBoundary::active(candidates[k], force[candidates[k].equation], u_system[candidates[k].equation], alpha_);
+  std::vector<std::vector<double>> du = d_force;
+  for (auto& rhs : du) {
+    for (double& v : rhs) v = -v;
+    for (std::size_t k = 0; k < candidates.size(); ++k)
+      if (active[k]) rhs[candidates[k].equation] = 0.0;
+  }
+  newton_->solve_linearized(u_system, alpha_, du);
+  std::vector<double> tangent(static_cast<std::size_t>(pattern.nonzeros()));
+  bulk.tangent(u_system.data(), tangent.data());
+  std::vector<double> base_derivative(base.size(), 0.0), k_du(n);
+  for (std::size_t b = 0; b < base.size(); ++b) {
+    pattern.multiply(tangent, du[b].data(), k_du.data());
+    double sum = 0.0;
+    for (std::size_t k = 0; k < candidates.size(); ++k)
+      if (active[k]) sum -= d_force[b][candidates[k].equation] + k_du[candidates[k].equation];
+    base_derivative[b] = contact.symmetry_factor() * sum;
+  }
+  // The user's parameters.  e0 = sigma_y / (3 mu) with mu = E / (2 (1 + nu)): at fixed E,
+  // d e0 / d sigma_y = e0 / sigma_y; at fixed sigma_y, d e0 / dE = -e0 / E.
+  const double dP_dE = base_derivative[0], dP_de0 = base_derivative[1];
+  const bool by_yield_stress = m.yield_stress.has_value();
+  std::vector<double> result;
+  for (MaterialParameter p : parameters) {
+    switch (p) {
+      case MaterialParameter::E: result.push_back(by_yield_stress ? dP_dE - dP_de0 * m.e0 / m.E : dP_dE); break;
+      case MaterialParameter::e0: result.push_back(dP_de0); break;
+      case MaterialParameter::yield_stress:
+        result.push_back(dP_de0 * m.e0 / value_of(m, MaterialParameter::yield_stress));
+        break;
+      case MaterialParameter::kappa: result.push_back(base_derivative[2]); break;
+      case MaterialParameter::n: result.push_back(base_derivative[3]); break;
+      case MaterialParameter::nu: return std::nullopt;
+    }
+  }
+  return result;
+}
+
 std::vector<LayerForce> Simulation::layer_forces() const {
   return indentsim::layer_forces(*mesh_, *bulk_);
 }

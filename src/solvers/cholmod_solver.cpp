@@ -137,6 +137,7 @@ CholmodSolver::~CholmodSolver() = default;
 
 long CholmodSolver::numeric_factorizations() const { return state_->numeric_factorizations; }
 void CholmodSolver::keep_factor_once() { state_->keep_factor = true; }
+void CholmodSolver::clear_keep_factor() { state_->keep_factor = false; }
 long CholmodSolver::symbolic_analyses() const { return state_->symbolic_analyses; }
 double CholmodSolver::condition_estimate() const {
   if (!state_->factor) return 0.0;

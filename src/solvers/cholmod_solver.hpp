@@ -27,6 +27,8 @@ public:
   long numeric_factorizations() const;
   /// The next setup keeps the current factor instead of factoring its matrix (a chord step).
   void keep_factor_once();
+  /// Withdraws a pending keep_factor_once (the next setup factors its matrix).
+  void clear_keep_factor();
   long symbolic_analyses() const;
   /// 1 / rcond of the last factor (CHOLMOD's cheap estimate from the diagonal of L).
   double condition_estimate() const;

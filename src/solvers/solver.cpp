@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <stdexcept>
 #include <type_traits>
 
+#include "indentsim/error.hpp"
 #include "indentsim/interruption.hpp"
 
 #include "cholmod_solver.hpp"
@@ -341,6 +343,38 @@ NewtonReport NewtonSolver::solve(double alpha, std::vector<double>& u, Globaliza
   report.residual_history = m.residual_history;
   std::copy(data, data + u.size(), u.begin());
   return report;
+}
+
+void NewtonSolver::solve_linearized(const std::vector<double>& u, double alpha,
+                                    std::vector<std::vector<double>>& right_hand_sides) {
+  Impl& m = *impl_;
+  const std::size_t n = static_cast<std::size_t>(m.equations.size());
+  if (u.size() != n) throw std::invalid_argument("solve_linearized: u does not fit the system");
+  m.alpha = alpha;
+  // The residual first: the contact rows' branch is chosen from the internal force at u.
+  std::vector<double> f(n);
+  m.equations.residual(u.data(), alpha, f.data());
+  SUNMatrix j = m.jacobian.get();
+  const auto& pattern = m.equations.pattern();
+  std::copy(pattern.column_start().begin(), pattern.column_start().end(), SUNSparseMatrix_IndexPointers(j));
+  std::copy(pattern.row_index().begin(), pattern.row_index().end(), SUNSparseMatrix_IndexValues(j));
+  m.equations.jacobian(u.data(), alpha, SUNSparseMatrix_Data(j));
+  // A chord step's request to keep the factor may be pending from the converged solve: this
+  // matrix must be factored.
+  m.klu.keep_factor = false;
+  if (m.cholmod) m.cholmod->clear_keep_factor();
+  SUNLinearSolver solver = m.cholmod ? m.cholmod->get() : m.klu_shell.get();
+  if (SUNLinSolSetup(solver, j) != SUNLS_SUCCESS) throw SolverError("the sensitivity system could not be factored");
+  sundials::Vector x = sundials::make_serial_vector(static_cast<sunindextype>(n), m.context);
+  sundials::Vector b = sundials::make_serial_vector(static_cast<sunindextype>(n), m.context);
+  for (auto& rhs : right_hand_sides) {
+    if (rhs.size() != n) throw std::invalid_argument("solve_linearized: a right-hand side does not fit the system");
+    std::copy(rhs.begin(), rhs.end(), N_VGetArrayPointer(b.get()));
+    if (SUNLinSolSolve(solver, j, x.get(), b.get(), 0.0) != SUNLS_SUCCESS)
+      throw SolverError("the sensitivity system could not be solved");
+    const double* xs = N_VGetArrayPointer(x.get());
+    std::copy(xs, xs + n, rhs.begin());
+  }
 }
 
 long NewtonSolver::total_factorizations() const {

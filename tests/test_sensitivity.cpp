@@ -1,0 +1,149 @@
+// Forward sensitivities dP/d(theta) through the converged Newton system
+// (Simulation::force_sensitivities) against central finite differences of whole runs, for every
+// parameter the fit differentiates this way, in both scenes, elastic and plastic, with contact,
+// on the condensed and on the whole-mesh system.  The mesh is pinned (mesh.contact_half_width,
+// mesh.element) so that the finite differences see the same discretization.
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "indentsim/load_case.hpp"
+#include "indentsim/material_parameter.hpp"
+#include "indentsim/simulation.hpp"
+
+namespace indentsim {
+namespace {
+
+struct ForceAndSensitivities {
+  double force = 0.0;
+  std::optional<std::vector<double>> sensitivities;
+};
+
+ForceAndSensitivities final_force(const LoadCase& lc, const std::vector<MaterialParameter>& parameters) {
+  Simulation sim(lc);
+  sim.run();
+  ForceAndSensitivities r;
+  r.force = sim.contact().force;
+  r.sensitivities = sim.force_sensitivities(parameters);
+  return r;
+}
+
+/// Central difference of the final P in each parameter with relative step `h`.
+std::vector<double> finite_differences(const LoadCase& lc, const std::vector<MaterialParameter>& parameters, double h) {
+  std::vector<double> d;
+  for (MaterialParameter p : parameters) {
+    const double value = value_of(lc.material, p);
+    double sides[2];
+    for (int s = 0; s < 2; ++s) {
+      LoadCase perturbed = lc;
+      set_value(perturbed.material, p, value * (1.0 + (s == 0 ? h : -h)));
+      sides[s] = final_force(perturbed, {}).force;
+    }
+    d.push_back((sides[0] - sides[1]) / (2.0 * h * value));
+  }
+  return d;
+}
+
+void expect_sensitivities_match(const LoadCase& lc, const std::vector<MaterialParameter>& parameters, double tolerance) {
+  const ForceAndSensitivities base = final_force(lc, parameters);
+  ASSERT_TRUE(base.sensitivities.has_value());
+  // A step of 2e-5: small enough that no Gauss point crosses the elastic limit inside it (at
+  // 1e-4 one does on the plane-strain linear-hardening case, a kink of 1e-5 in d ln P / d ln kappa).
+  const std::vector<double> fd = finite_differences(lc, parameters, 2e-5);
+  for (std::size_t i = 0; i < parameters.size(); ++i) {
+    const double value = value_of(lc.material, parameters[i]);
+    // Compared as d ln P / d ln theta: the relative change of P per relative change of theta.
+    const double exact = (*base.sensitivities)[i] * value / base.force;
+    const double numeric = fd[i] * value / base.force;
+    EXPECT_NEAR(exact, numeric, tolerance * std::max(1.0, std::abs(numeric))) << key_of(parameters[i]);
+    EXPECT_GT(std::abs(numeric), 1e-3) << key_of(parameters[i]) << ": a parameter the test should feel";
+  }
+}
+
+LoadCase sphere_case(SceneKind scene, MaterialModel model, HardeningLaw law) {
+  LoadCase lc;
+  lc.geometry.kind = scene;
+  lc.geometry.lx = lc.geometry.ly = 10e-3;
+  lc.punch.radius = 1e-3;
+  lc.material.model = model;
+  lc.material.E = 200e9;
+  lc.material.nu = 0.3;
+  lc.material.hardening = law;
+  lc.material.e0 = 1.5e-3;
+  lc.material.kappa = 0.8;
+  lc.material.n = 0.2;
+  lc.load.path = {0.0, 20e-6};
+  lc.load.increments = 5;
+  lc.mesh.contact_nodes = 10;
+  lc.mesh.contact_half_width = 150e-6;
+  lc.mesh.element = ElementChoice::q1;
+  validate(lc);
+  return lc;
+}
+
+TEST(ForceSensitivity, ElasticSphereInBothScenesMatchesFiniteDifferences) {
+  for (SceneKind scene : {SceneKind::plane_strain, SceneKind::axisymmetric}) {
+    LoadCase lc = sphere_case(scene, MaterialModel::elastic, HardeningLaw::linear);
+    expect_sensitivities_match(lc, {MaterialParameter::E}, 1e-5);
+  }
+}
+
+TEST(ForceSensitivity, IlyushinLinearHardeningMatchesFiniteDifferences) {
+  for (SceneKind scene : {SceneKind::plane_strain, SceneKind::axisymmetric}) {
+    LoadCase lc = sphere_case(scene, MaterialModel::ilyushin, HardeningLaw::linear);
+    expect_sensitivities_match(lc, {MaterialParameter::E, MaterialParameter::e0, MaterialParameter::kappa}, 1e-5);
+  }
+}
+
+TEST(ForceSensitivity, IlyushinPowerLawWithYieldStressMatchesFiniteDifferences) {
+  for (SceneKind scene : {SceneKind::plane_strain, SceneKind::axisymmetric}) {
+    LoadCase lc = sphere_case(scene, MaterialModel::ilyushin, HardeningLaw::power);
+    set_value(lc.material, MaterialParameter::yield_stress, value_of(lc.material, MaterialParameter::yield_stress));
+    const std::vector<MaterialParameter> ps{MaterialParameter::E, MaterialParameter::yield_stress, MaterialParameter::n};
+    expect_sensitivities_match(lc, ps, 1e-5);
+    // At fixed nu and n every stress scales with (E, sigma_y) together, so P is homogeneous of
+    // degree one in them and Euler's theorem gives d ln P / d ln E + d ln P / d ln sigma_y = 1.
+    const ForceAndSensitivities s = final_force(lc, ps);
+    const double sum = ((*s.sensitivities)[0] * lc.material.E + (*s.sensitivities)[1] * *lc.material.yield_stress) / s.force;
+    EXPECT_NEAR(sum, 1.0, 1e-9);
+  }
+}
+
+TEST(ForceSensitivity, WholeMeshAndCondensedSystemsAgree) {
+  LoadCase lc = sphere_case(SceneKind::axisymmetric, MaterialModel::ilyushin, HardeningLaw::power);
+  const std::vector<MaterialParameter> ps{MaterialParameter::E, MaterialParameter::e0, MaterialParameter::n};
+  lc.solver.far_field = FarFieldChoice::condense;
+  const auto condensed = final_force(lc, ps);
+  lc.solver.far_field = FarFieldChoice::full;
+  const auto full = final_force(lc, ps);
+  ASSERT_TRUE(condensed.sensitivities && full.sensitivities);
+  for (std::size_t i = 0; i < ps.size(); ++i)
+    EXPECT_NEAR((*condensed.sensitivities)[i], (*full.sensitivities)[i], 1e-7 * std::abs((*full.sensitivities)[i]));
+}
+
+TEST(ForceSensitivity, ConeUnderBbarMatchesFiniteDifferences) {
+  LoadCase lc = sphere_case(SceneKind::axisymmetric, MaterialModel::ilyushin, HardeningLaw::power);
+  lc.punch.shape = PunchShapeKind::cone;
+  lc.punch.half_angle = 70.3;
+  lc.geometry.lx = lc.geometry.ly = 0.2e-3;
+  lc.load.path = {0.0, 1e-6};
+  lc.mesh.contact_half_width = 3.2e-6;
+  lc.mesh.element = ElementChoice::bbar;
+  validate(lc);
+  expect_sensitivities_match(lc, {MaterialParameter::E, MaterialParameter::e0, MaterialParameter::n}, 1e-5);
+}
+
+TEST(ForceSensitivity, HistoryDependentStatesSayTheyNeedFiniteDifferences) {
+  LoadCase j2 = sphere_case(SceneKind::axisymmetric, MaterialModel::j2, HardeningLaw::power);
+  EXPECT_FALSE(final_force(j2, {MaterialParameter::e0}).sensitivities.has_value());
+  LoadCase unloaded = sphere_case(SceneKind::axisymmetric, MaterialModel::ilyushin, HardeningLaw::power);
+  unloaded.load.path = {0.0, 20e-6, 15e-6};
+  EXPECT_FALSE(final_force(unloaded, {MaterialParameter::e0}).sensitivities.has_value());
+  LoadCase elastic = sphere_case(SceneKind::axisymmetric, MaterialModel::elastic, HardeningLaw::power);
+  EXPECT_FALSE(final_force(elastic, {MaterialParameter::nu}).sensitivities.has_value());
+}
+
+}  // namespace
+}  // namespace indentsim
