@@ -9,6 +9,7 @@ packages=(
   libgtest-dev libtomlplusplus-dev libcli11-dev
   libcsv-dev                 # CSV reader of measured tip profiles and load-depth curves
   nlohmann-json3-dev         # JSON: summary.json read back and analysis.json (indentsim analyze)
+  libceres-dev               # Ceres Solver: the bounded Levenberg-Marquardt of indentsim fit
   libopenblas0-pthread       # BLAS for CHOLMOD's supernodal factorization (takes over libblas.so.3)
   python3 python3-matplotlib
   clang libclang-rt-14-dev   # libFuzzer targets (scripts/fuzz.sh)

@@ -47,6 +47,10 @@ struct RunPlan {
 };
 RunPlan plan_run(const LoadCase& load_case, std::optional<double> planned_contact_half_width = std::nullopt);
 
+/// The element a load case gets: mesh.element, or for "auto" B-bar where Q1 would lock (nu >=
+/// 0.45, nearly perfect plasticity, a plastic material under a cone), the paper's Q1 elsewhere.
+ElementKind choose_element(const LoadCase& load_case);
+
 /// Warnings (not errors) about values that run but are probably a slip: E outside 1 kPa - 2 TPa,
 /// alpha / R > 0.05, an estimated contact half-width above 0.1 of lx or ly.
 std::vector<std::string> plausibility_warnings(const LoadCase& load_case, const MeshPlan& plan);

@@ -77,28 +77,6 @@ bool unloads(const std::vector<double>& path) {
   return false;
 }
 
-// "auto": the paper's exact Q1 element unless the scene locks it -- nearly incompressible
-// elasticity (nu >= 0.45), nearly perfect plasticity (isochoric flow with kappa > 0.95 or
-// n < 0.1), or a plastic material under a cone, whose strain is set by the angle and not by the
-// depth, so the flow under it is fully plastic and isochoric from the first increment (Q1 locks:
-// on berkovich_cone with Ilyushin's law it overestimates P/h^2 by 1%, with a sawtooth 1.5x as
-// large) -- where mean dilatation (B-bar) is used.
-ElementKind choose_element(const LoadCase& lc) {
-  switch (lc.mesh.element) {
-    case ElementChoice::q1: return ElementKind::q1;
-    case ElementChoice::bbar: return ElementKind::bbar;
-    case ElementChoice::automatic: break;
-  }
-  const auto& m = lc.material;
-  const bool near_incompressible = m.nu >= 0.45;
-  const bool plastic = m.model != MaterialModel::elastic;
-  const bool near_perfect_plasticity =
-      plastic && (m.hardening == HardeningLaw::linear ? m.kappa > 0.95 : m.n < 0.1);
-  const bool sharp_plastic_indentation = plastic && lc.punch.shape == PunchShapeKind::cone;
-  return near_incompressible || near_perfect_plasticity || sharp_plastic_indentation ? ElementKind::bbar
-                                                                                       : ElementKind::q1;
-}
-
 // "auto": KLU below the measured crossover, CHOLMOD's supernodal Cholesky above it.
 LinearSolverKind choose_linear_solver(LinearSolverChoice choice, int unknowns) {
   switch (choice) {
@@ -137,6 +115,28 @@ NearField choose_near_field(const LoadCase& lc, const Mesh& mesh, const MeshPlan
 }
 
 }  // namespace
+
+// "auto": the paper's exact Q1 element unless the scene locks it -- nearly incompressible
+// elasticity (nu >= 0.45), nearly perfect plasticity (isochoric flow with kappa > 0.95 or
+// n < 0.1), or a plastic material under a cone, whose strain is set by the angle and not by the
+// depth, so the flow under it is fully plastic and isochoric from the first increment (Q1 locks:
+// on berkovich_cone with Ilyushin's law it overestimates P/h^2 by 1%, with a sawtooth 1.5x as
+// large) -- where mean dilatation (B-bar) is used.
+ElementKind choose_element(const LoadCase& lc) {
+  switch (lc.mesh.element) {
+    case ElementChoice::q1: return ElementKind::q1;
+    case ElementChoice::bbar: return ElementKind::bbar;
+    case ElementChoice::automatic: break;
+  }
+  const auto& m = lc.material;
+  const bool near_incompressible = m.nu >= 0.45;
+  const bool plastic = m.model != MaterialModel::elastic;
+  const bool near_perfect_plasticity =
+      plastic && (m.hardening == HardeningLaw::linear ? m.kappa > 0.95 : m.n < 0.1);
+  const bool sharp_plastic_indentation = plastic && lc.punch.shape == PunchShapeKind::cone;
+  return near_incompressible || near_perfect_plasticity || sharp_plastic_indentation ? ElementKind::bbar
+                                                                                       : ElementKind::q1;
+}
 
 std::vector<std::string> plausibility_warnings(const LoadCase& lc, const MeshPlan& plan) {
   std::vector<std::string> warnings;

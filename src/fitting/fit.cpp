@@ -1,0 +1,363 @@
+#include "indentsim/fit.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <set>
+
+#include <Eigen/SVD>
+#include <ceres/ceres.h>
+#include <fmt/format.h>
+
+#include "indentsim/error.hpp"
+
+namespace indentsim {
+
+namespace {
+
+/// The residuals of one data set as a Ceres cost function of the scaled parameters x = theta / scale.
+/// Ceres asks for the residuals at a trial point and, once the point is accepted, for the
+/// Jacobian at the same point: the last evaluation is kept, and with forward sensitivities it
+/// always carries its Jacobian (one factorization per data depth, far cheaper than a second run).
+class DataSetResiduals : public ceres::CostFunction {
+public:
+  DataSetResiduals(const ForwardModel& model, std::vector<double> scale, int& forward_runs)
+      : model_(model), scale_(std::move(scale)), forward_runs_(forward_runs) {
+    const FitData& d = model.data();
+    set_num_residuals(static_cast<int>(d.values.size()));
+    mutable_parameter_block_sizes()->push_back(static_cast<int>(scale_.size()));
+    double largest = 0.0;
+    for (double v : d.values) largest = std::max(largest, std::abs(v));
+    factor_ = d.weight / (largest * std::sqrt(static_cast<double>(d.values.size())));
+  }
+
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
+    std::vector<double> theta(scale_.size());
+    for (std::size_t j = 0; j < theta.size(); ++j) theta[j] = parameters[0][j] * scale_[j];
+    const bool want_jacobian = jacobians && jacobians[0];
+    if (!(cached_ && theta == cached_theta_ && (!want_jacobian || !cached_.jacobian.empty()))) {
+      try {
+        ModelEvaluation e = model_.evaluate(theta, want_jacobian || model_.uses_sensitivities());
+        forward_runs_ += e.forward_runs;
+        cached_ = std::move(e);
+        cached_theta_ = theta;
+      } catch (const SolverError&) {
+        forward_runs_ += 3;
+        return false;  // the optimiser shortens its step
+      } catch (const InputError&) {
+        return false;  // a parameter combination the model refuses (Ilyushin's admissibility)
+      }
+    }
+    const FitData& d = model_.data();
+    for (std::size_t i = 0; i < d.values.size(); ++i) residuals[i] = factor_ * (cached_.values[i] - d.values[i]);
+    if (want_jacobian)
+      for (std::size_t i = 0; i < d.values.size(); ++i)
+        for (std::size_t j = 0; j < scale_.size(); ++j)
+          jacobians[0][i * scale_.size() + j] = factor_ * cached_.jacobian[i][j] * scale_[j];
+    return true;
+  }
+
+  /// The last evaluation (its model values and Jacobian in theta) and the residual factor.
+  const ModelEvaluation& last() const { return cached_; }
+  double factor() const { return factor_; }
+
+private:
+  struct Cache : ModelEvaluation {
+    bool valid = false;
+    explicit operator bool() const { return valid; }
+    Cache& operator=(ModelEvaluation&& e) {
+      ModelEvaluation::operator=(std::move(e));
+      valid = true;
+      return *this;
+    }
+  };
+  const ForwardModel& model_;
+  std::vector<double> scale_;
+  int& forward_runs_;
+  double factor_ = 1.0;
+  mutable Cache cached_;
+  mutable std::vector<double> cached_theta_;
+};
+
+class ProgressReporter : public ceres::IterationCallback {
+public:
+  ProgressReporter(const FitSettings& settings, FitProgress progress, const std::vector<double>& x,
+                   const std::vector<double>& scale, const int& forward_runs)
+      : settings_(settings), progress_(std::move(progress)), x_(x), scale_(scale), forward_runs_(forward_runs) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
+    if (!settings_.on_iteration) return ceres::SOLVER_CONTINUE;
+    progress_.iteration = s.iteration;
+    progress_.cost = s.cost;
+    progress_.theta.resize(x_.size());
+    for (std::size_t j = 0; j < x_.size(); ++j) progress_.theta[j] = x_[j] * scale_[j];
+    progress_.forward_runs = forward_runs_;
+    settings_.on_iteration(progress_);
+    return ceres::SOLVER_CONTINUE;
+  }
+
+private:
+  const FitSettings& settings_;
+  FitProgress progress_;
+  const std::vector<double>& x_;
+  const std::vector<double>& scale_;
+  const int& forward_runs_;
+};
+
+/// The radical inverse of k in base b: the k-th point of van der Corput's sequence.
+double radical_inverse(int k, int base) {
+  double result = 0.0, f = 1.0 / base;
+  for (; k > 0; k /= base, f /= base) result += f * (k % base);
+  return result;
+}
+
+/// Start k >= 1: the k-th Halton point of the box, log-uniform for a parameter whose bounds are
+/// both positive and a decade or more apart (E, e0, sigma_y), uniform otherwise.
+std::vector<double> spread_start(int k, const std::vector<FreeParameter>& free) {
+  static constexpr int primes[] = {2, 3, 5, 7, 11, 13};
+  std::vector<double> theta;
+  for (std::size_t j = 0; j < free.size(); ++j) {
+    const double u = radical_inverse(k, primes[j % 6]);
+    const auto& f = free[j];
+    if (f.lower > 0.0 && f.upper >= 10.0 * f.lower) theta.push_back(f.lower * std::pow(f.upper / f.lower, u));
+    else theta.push_back(f.lower + u * (f.upper - f.lower));
+  }
+  return theta;
+}
+
+void check_problem(const FitProblem& problem) {
+  if (problem.data.empty()) throw InputError("fit", "data", "no data to fit");
+  if (problem.free.empty()) throw InputError("fit", "--free", "no parameter to fit");
+  std::set<MaterialParameter> seen;
+  std::size_t points = 0;
+  for (const auto& d : problem.data) points += d.values.size();
+  for (const auto& f : problem.free) {
+    const std::string key = key_of(f.parameter);
+    if (!seen.insert(f.parameter).second) throw InputError("fit", key, "is listed twice among the free parameters");
+    if ((f.parameter == MaterialParameter::e0 && seen.count(MaterialParameter::yield_stress)) ||
+        (f.parameter == MaterialParameter::yield_stress && seen.count(MaterialParameter::e0)))
+      throw InputError("fit", key, "material.e0 and material.yield_stress are one parameter: free one of them");
+    const auto [low, high] = physical_range(f.parameter);
+    if (!(f.lower < f.upper))
+      throw InputError("fit", key, fmt::format("bounds {}:{} are reversed or empty (lower < upper needed)", f.lower, f.upper));
+    if (!(f.lower >= low && f.upper <= high) || (f.lower == low && low == 0.0 && f.parameter != MaterialParameter::kappa) ||
+        f.upper == high)
+      throw InputError("fit", key,
+                       fmt::format("bounds {}:{} leave the physical range ({}, {})", f.lower, f.upper, low, high));
+    for (const auto& d : problem.data) {
+      const MaterialInput& m = d.load_case.material;
+      const bool plastic_parameter = f.parameter == MaterialParameter::e0 || f.parameter == MaterialParameter::yield_stress ||
+                                     f.parameter == MaterialParameter::kappa || f.parameter == MaterialParameter::n;
+      if (plastic_parameter && m.model == MaterialModel::elastic)
+        throw InputError(d.load_case.source, key, "has no effect: material.model is \"elastic\"");
+      if (f.parameter == MaterialParameter::kappa && m.hardening != HardeningLaw::linear)
+        throw InputError(d.load_case.source, key, "is the linear law's: this case has material.hardening = \"power\" (free material.n)");
+      if (f.parameter == MaterialParameter::n && m.hardening != HardeningLaw::power)
+        throw InputError(d.load_case.source, key, "is the power law's: this case has material.hardening = \"linear\" (free material.kappa)");
+    }
+  }
+  if (points < problem.free.size())
+    throw InputError(problem.data.front().file, "data",
+                     fmt::format("{} point(s) for {} free parameters: a fit needs at least as many points", points,
+                                 problem.free.size()));
+}
+
+std::string percent(double fraction) { return fmt::format("{:.3g}%", 100.0 * fraction); }
+
+}  // namespace
+
+FitResult fit(const FitProblem& problem) {
+  const auto start_time = std::chrono::steady_clock::now();
+  check_problem(problem);
+  const std::size_t p = problem.free.size();
+  std::vector<MaterialParameter> parameters;
+  std::vector<std::pair<double, double>> bounds;
+  for (const auto& f : problem.free) {
+    parameters.push_back(f.parameter);
+    bounds.emplace_back(f.lower, f.upper);
+  }
+  std::vector<std::unique_ptr<ForwardModel>> models;
+  for (const auto& d : problem.data)
+    models.push_back(std::make_unique<ForwardModel>(d, parameters, bounds, problem.settings.finite_differences));
+
+  // The parameters Ceres sees, x = theta / scale, are of order one.
+  const MaterialInput& first = problem.data.front().load_case.material;
+  std::vector<double> scale, case_start;
+  for (const auto& f : problem.free) {
+    const double v = std::clamp(value_of(first, f.parameter), f.lower, f.upper);
+    case_start.push_back(v);
+    scale.push_back(v != 0.0 ? std::abs(v) : std::max(std::abs(f.lower), std::abs(f.upper)));
+  }
+
+  FitResult result;
+  int forward_runs = 0;
+  std::vector<std::unique_ptr<DataSetResiduals>> costs;
+  for (const auto& m : models) costs.push_back(std::make_unique<DataSetResiduals>(*m, scale, forward_runs));
+
+  const auto solve_from = [&](const std::vector<double>& start, int start_index, int starts, int max_iterations) {
+    std::vector<double> x(p);
+    for (std::size_t j = 0; j < p; ++j) x[j] = start[j] / scale[j];
+    ceres::Problem::Options problem_options;
+    problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    ceres::Problem ceres_problem(problem_options);
+    for (const auto& c : costs) ceres_problem.AddResidualBlock(c.get(), nullptr, x.data());
+    for (std::size_t j = 0; j < p; ++j) {
+      ceres_problem.SetParameterLowerBound(x.data(), static_cast<int>(j), problem.free[j].lower / scale[j]);
+      ceres_problem.SetParameterUpperBound(x.data(), static_cast<int>(j), problem.free[j].upper / scale[j]);
+    }
+    FitProgress progress;
+    progress.start = start_index;
+    progress.starts = starts;
+    ProgressReporter reporter(problem.settings, progress, x, scale, forward_runs);
+    ceres::Solver::Options options;
+    options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+    options.linear_solver_type = ceres::DENSE_QR;
+    options.max_num_iterations = max_iterations;
+    // Parameters to 1e-7 relative: far below any standard error the data can give.
+    options.parameter_tolerance = 1e-7;
+    options.function_tolerance = 1e-10;
+    options.gradient_tolerance = 1e-14;
+    options.logging_type = ceres::SILENT;
+    options.minimizer_progress_to_stdout = false;
+    options.num_threads = 1;
+    options.update_state_every_iteration = true;
+    options.callbacks.push_back(&reporter);
+    ceres::Solver::Summary summary;
+    ceres::Solve(options, &ceres_problem, &summary);
+    StartOutcome outcome;
+    outcome.start = start;
+    for (std::size_t j = 0; j < p; ++j) outcome.result.push_back(x[j] * scale[j]);
+    outcome.cost = summary.final_cost;
+    outcome.iterations = static_cast<int>(summary.iterations.size()) - 1;
+    outcome.converged = summary.termination_type == ceres::CONVERGENCE;
+    outcome.message = summary.message;
+    result.iterations += std::max(0, outcome.iterations);
+    return outcome;
+  };
+
+  const int starts = std::max(1, problem.settings.starts);
+  for (int k = 0; k < starts; ++k) {
+    const std::vector<double> start = k == 0 ? case_start : spread_start(k, problem.free);
+    result.starts.push_back(solve_from(start, k + 1, starts, problem.settings.max_iterations));
+  }
+  const auto best = std::min_element(result.starts.begin(), result.starts.end(), [](const auto& a, const auto& b) {
+    return std::isfinite(a.cost) && (!std::isfinite(b.cost) || a.cost < b.cost);
+  });
+  if (!std::isfinite(best->cost)) throw SolverError("no start of the fit reached a successful forward run");
+  std::vector<double> theta = best->result;
+
+  // The mesh was planned at the load case's own parameters.  A run of the fitted case plans it at
+  // the fitted ones (for a plastic case from its pilot's contact width): re-plan there and polish,
+  // so the answer is that of the mesh its own case would use.
+  if (problem.settings.replan_mesh) {
+    bool changed = false;
+    for (const auto& m : models) {
+      const double before = m->planned_contact_half_width();
+      m->replan_mesh(theta);
+      changed = changed || m->planned_contact_half_width() != before;
+    }
+    if (changed) {
+      result.mesh_replanned = true;
+      StartOutcome polished = solve_from(theta, 0, starts, problem.settings.max_iterations);
+      if (std::isfinite(polished.cost)) theta = polished.result;
+    }
+  }
+
+  // Statistics at the optimum: residuals r and J = dr/d(theta).
+  std::size_t m_total = 0;
+  for (const auto& d : problem.data) m_total += d.values.size();
+  Eigen::VectorXd r(static_cast<Eigen::Index>(m_total));
+  Eigen::MatrixXd jacobian(static_cast<Eigen::Index>(m_total), static_cast<Eigen::Index>(p));
+  double weight_sum = 0.0;
+  Eigen::Index row = 0;
+  for (std::size_t d = 0; d < models.size(); ++d) {
+    const FitData& data = problem.data[d];
+    const ModelEvaluation e = models[d]->evaluate(theta, true);
+    forward_runs += e.forward_runs;
+    const double factor = costs[d]->factor();
+    DataSetFit out;
+    out.model = e.values;
+    double sum2 = 0.0, largest = 0.0;
+    for (std::size_t i = 0; i < data.values.size(); ++i, ++row) {
+      const double diff = e.values[i] - data.values[i];
+      sum2 += diff * diff;
+      largest = std::max(largest, std::abs(data.values[i]));
+      r[row] = factor * diff;
+      for (std::size_t j = 0; j < p; ++j) jacobian(row, static_cast<Eigen::Index>(j)) = factor * e.jacobian[i][j];
+    }
+    out.rms_residual = std::sqrt(sum2 / static_cast<double>(data.values.size()));
+    out.rms_relative = out.rms_residual / largest;
+    out.gradients = models[d]->uses_sensitivities() ? "forward sensitivities"
+                                                     : "finite differences (" + models[d]->finite_difference_reason() + ")";
+    out.fitted_case = models[d]->fitted_case(theta);
+    out.contact_half_width_planned = models[d]->planned_contact_half_width();
+    result.data.push_back(std::move(out));
+    weight_sum += data.weight * data.weight;
+  }
+  result.values = theta;
+  result.cost = 0.5 * r.squaredNorm();
+  result.rms_relative = std::sqrt(r.squaredNorm() / weight_sum);
+
+  // Relative sensitivities J diag(theta): what a 100% change of each combination does.
+  Eigen::MatrixXd relative = jacobian;
+  for (std::size_t j = 0; j < p; ++j) relative.col(static_cast<Eigen::Index>(j)) *= theta[j];
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(relative, Eigen::ComputeThinV);
+  const Eigen::VectorXd sigma = svd.singularValues();
+  const Eigen::MatrixXd v = svd.matrixV();
+  for (Eigen::Index k = 0; k < sigma.size(); ++k) result.singular_values.push_back(sigma[k]);
+  const double smallest = sigma[sigma.size() - 1];
+  result.condition_number = smallest > 0.0 ? sigma[0] / smallest : std::numeric_limits<double>::infinity();
+  result.identifiable = result.condition_number <= identifiability_condition_limit;
+
+  // Covariance s2 (J^T J)^-1, through the SVD: cov(ln theta) = s2 V S^-2 V^T.
+  const double dof = static_cast<double>(m_total) - static_cast<double>(p);
+  const double s2 = dof > 0.0 ? r.squaredNorm() / dof : std::numeric_limits<double>::quiet_NaN();
+  const Eigen::Index pp = static_cast<Eigen::Index>(p);
+  Eigen::MatrixXd cov_log = Eigen::MatrixXd::Zero(pp, pp);
+  for (Eigen::Index k = 0; k < sigma.size(); ++k) {
+    const double inv2 = sigma[k] > 1e-14 * sigma[0] ? 1.0 / (sigma[k] * sigma[k]) : std::numeric_limits<double>::infinity();
+    cov_log += s2 * inv2 * v.col(k) * v.col(k).transpose();
+  }
+  result.covariance = cov_log;
+  for (Eigen::Index a = 0; a < pp; ++a)
+    for (Eigen::Index b = 0; b < pp; ++b) result.covariance(a, b) *= theta[static_cast<std::size_t>(a)] * theta[static_cast<std::size_t>(b)];
+  result.correlation = Eigen::MatrixXd::Identity(pp, pp);
+  for (Eigen::Index a = 0; a < pp; ++a) {
+    result.std_errors.push_back(std::sqrt(result.covariance(a, a)));
+    for (Eigen::Index b = 0; b < pp; ++b)
+      if (a != b) result.correlation(a, b) = result.covariance(a, b) / std::sqrt(result.covariance(a, a) * result.covariance(b, b));
+  }
+
+  // The weakest combination, in words: scaled so that its largest component is 1%.
+  const Eigen::VectorXd weak = v.col(pp - 1);
+  for (Eigen::Index j = 0; j < pp; ++j) result.weakest_direction.push_back(weak[j]);
+  if (!result.identifiable && p > 1) {
+    const Eigen::Index lead = [&] {
+      Eigen::Index k = 0;
+      weak.cwiseAbs().maxCoeff(&k);
+      return k;
+    }();
+    const Eigen::VectorXd step = 0.01 * weak / weak[lead];
+    std::string parts;
+    for (Eigen::Index j = 0; j < pp; ++j) {
+      if (j == lead || std::abs(step[j]) < 1e-4) continue;
+      parts += fmt::format("{} {} {} by {}", parts.empty() ? "while" : " and", step[j] > 0 ? "raising" : "lowering",
+                           key_of(problem.free[static_cast<std::size_t>(j)].parameter), percent(std::abs(step[j])));
+    }
+    std::string names = key_of(problem.free[static_cast<std::size_t>(lead)].parameter);
+    for (Eigen::Index j = 0; j < pp; ++j)
+      if (j != lead && std::abs(step[j]) >= 1e-4) names += " and " + key_of(problem.free[static_cast<std::size_t>(j)].parameter);
+    result.poorly_determined = fmt::format(
+        "{} trade off: raising {} by 1% {} changes the fit to the data by only {} (weighted rms, relative to each data "
+        "set's largest value); condition number {:.3g} > {:g}",
+        names, key_of(problem.free[static_cast<std::size_t>(lead)].parameter), parts.empty() ? "alone" : parts,
+        percent((relative * step).norm() / std::sqrt(weight_sum)), result.condition_number,
+        identifiability_condition_limit);
+  }
+  result.forward_runs = forward_runs;
+  result.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_time).count();
+  return result;
+}
+
+}  // namespace indentsim

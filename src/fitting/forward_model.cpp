@@ -1,0 +1,227 @@
+#include "indentsim/forward_model.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include <fmt/format.h>
+
+#include "indentsim/error.hpp"
+#include "indentsim/simulation.hpp"
+
+namespace indentsim {
+
+namespace {
+
+// Relative step of the one-sided finite differences: large against the Newton tolerance's noise
+// in P (1e-11 of the scene's forces), small against the curvature of P(theta).  A Gauss point
+// crossing the elastic limit inside the step changes d ln P / d ln theta by about 1e-5 at a step
+// of 1e-4 (tests/test_sensitivity.cpp): negligible for the optimiser.
+constexpr double finite_difference_step = 1e-5;
+
+int total_increments(const LoadInput& load) {
+  if (load.segment_increments.empty()) return load.increments;
+  return std::accumulate(load.segment_increments.begin(), load.segment_increments.end(), 0);
+}
+
+bool loading_only(const std::vector<double>& depths) {
+  for (std::size_t i = 1; i < depths.size(); ++i)
+    if (depths[i] <= depths[i - 1]) return false;
+  return true;
+}
+
+/// Linear interpolation of y(x) at x0 (x increasing), or nullopt outside [x.front(), x.back()].
+std::optional<double> interpolate(const std::vector<double>& x, const std::vector<double>& y, double x0) {
+  if (x.empty() || x0 < x.front() || x0 > x.back()) return std::nullopt;
+  const auto it = std::upper_bound(x.begin(), x.end(), x0);
+  if (it == x.end()) return y.back();
+  const std::size_t k = static_cast<std::size_t>(it - x.begin());
+  if (k == 0) return y.front();
+  const double t = (x0 - x[k - 1]) / (x[k] - x[k - 1]);
+  return y[k - 1] + t * (y[k] - y[k - 1]);
+}
+
+}  // namespace
+
+ForwardModel::ForwardModel(FitData data, std::vector<MaterialParameter> parameters,
+                           const std::vector<std::pair<double, double>>& bounds, bool finite_differences_only)
+    : data_(std::move(data)), parameters_(std::move(parameters)), bounds_(bounds) {
+  const LoadCase& user = data_.load_case;
+  const std::string& file = data_.file;
+  prepared_ = user;
+  if (data_.abscissa.empty() || data_.abscissa.size() != data_.values.size())
+    throw InputError(file, "data", "holds no points");
+
+  if (data_.kind == FitDataKind::force_depth_curve) {
+    // The load path through the data's depths, each step no longer than the case's own.
+    const double step = user.max_depth() / std::max(1, total_increments(user.load));
+    path_ = {0.0};
+    for (std::size_t i = 0; i < data_.abscissa.size(); ++i) {
+      const double depth = data_.abscissa[i];
+      if (!(depth >= 0.0))
+        throw InputError(file, fmt::format("row {}", i + 1), fmt::format("depth {} m is negative", depth));
+      if (depth > user.max_depth() * (1.0 + 1e-12))
+        throw InputError(file, fmt::format("row {}", i + 1),
+                         fmt::format("depth {:.6g} m is beyond the load case's deepest depth {:.6g} m ({}): the "
+                                     "mesh is planned for the case's load path; deepen load.path",
+                                     depth, user.max_depth(), user.source));
+      if (depth != path_.back()) path_.push_back(depth);
+      point_of_waypoint_.push_back(path_.size() - 1);
+    }
+    prepared_.load.path = path_;
+    prepared_.load.segment_increments.clear();
+    for (std::size_t s = 1; s < path_.size(); ++s)
+      prepared_.load.segment_increments.push_back(
+          std::max(1, static_cast<int>(std::ceil(std::abs(path_[s] - path_[s - 1]) / step - 1e-9))));
+    prepared_.load.increments = total_increments(prepared_.load);
+  } else {
+    const auto& path = user.load.path;
+    if (path.back() != 0.0 || !std::any_of(path.begin(), path.end(), [](double a) { return a > 0.0; }))
+      throw InputError(user.source, "load.path",
+                       fmt::format("an imprint ({}) is measured after the punch has left: the load path must end "
+                                   "at 0 (it ends at {} m)",
+                                   file, path.back()));
+    for (std::size_t i = 0; i < data_.abscissa.size(); ++i)
+      if (!(data_.abscissa[i] >= 0.0 && data_.abscissa[i] < user.geometry.lx))
+        throw InputError(file, fmt::format("row {}", i + 1),
+                         fmt::format("radius {} m is off the specimen's surface [0, {}) m", data_.abscissa[i],
+                                     user.geometry.lx));
+  }
+
+  // The element, chosen once for the whole box: B-bar if the automatic choice picks it anywhere
+  // in it (its conditions are monotone in each parameter, so the corners decide).
+  if (user.mesh.element == ElementChoice::automatic) {
+    bool bbar = false;
+    const std::size_t corners = std::size_t{1} << parameters_.size();
+    for (std::size_t c = 0; c < corners && !bbar; ++c) {
+      LoadCase corner = user;
+      for (std::size_t j = 0; j < parameters_.size(); ++j)
+        set_value(corner.material, parameters_[j], (c >> j) & 1 ? bounds_[j].second : bounds_[j].first);
+      bbar = choose_element(corner) == ElementKind::bbar;
+    }
+    prepared_.mesh.element = bbar ? ElementChoice::bbar : ElementChoice::q1;
+  }
+  std::vector<double> start;
+  for (MaterialParameter p : parameters_) start.push_back(value_of(user.material, p));
+  replan_mesh(start);
+
+  // Forward sensitivities where the state is a function of depth and theta alone.
+  if (finite_differences_only) fd_reason_ = "finite differences asked for";
+  else if (data_.kind == FitDataKind::imprint_profile) fd_reason_ = "an imprint follows the whole history";
+  else if (user.material.model == MaterialModel::j2) fd_reason_ = "J2 flow theory carries its history";
+  else if (!loading_only(data_.abscissa)) fd_reason_ = "the data unloads (Ilyushin's unloading branch)";
+  else if (std::count(parameters_.begin(), parameters_.end(), MaterialParameter::nu))
+    fd_reason_ = "nu also shapes the condensed far field";
+  sensitivities_ = fd_reason_.empty();
+}
+
+void ForwardModel::replan_mesh(const std::vector<double>& theta) {
+  LoadCase lc = data_.load_case;
+  for (std::size_t j = 0; j < parameters_.size(); ++j) set_value(lc.material, parameters_[j], theta[j]);
+  validate(lc);
+  const RunPlan plan = plan_run(lc);
+  prepared_.mesh.contact_half_width = plan.mesh.contact_half_width_estimate;
+}
+
+LoadCase ForwardModel::case_at(const std::vector<double>& theta) const {
+  LoadCase lc = prepared_;
+  for (std::size_t j = 0; j < parameters_.size(); ++j) set_value(lc.material, parameters_[j], theta[j]);
+  validate(lc);
+  return lc;
+}
+
+LoadCase ForwardModel::fitted_case(const std::vector<double>& theta) const {
+  LoadCase lc = data_.load_case;
+  for (std::size_t j = 0; j < parameters_.size(); ++j) set_value(lc.material, parameters_[j], theta[j]);
+  return lc;
+}
+
+std::vector<double> ForwardModel::run_once(const LoadCase& base, int refinement,
+                                           std::vector<std::vector<double>>* jacobian) const {
+  LoadCase lc = base;
+  for (int& n : lc.load.segment_increments) n *= refinement;
+  lc.load.increments *= refinement;
+  Simulation sim(lc);
+  const std::size_t points = data_.abscissa.size();
+  std::vector<double> values(points, 0.0);
+  if (data_.kind == FitDataKind::force_depth_curve) {
+    // The increments that end a waypoint of the path (the data depths).
+    std::vector<std::size_t> waypoint_of_step{0};
+    for (std::size_t s = 0; s < lc.load.segment_increments.size(); ++s)
+      for (int k = 1; k <= lc.load.segment_increments[s]; ++k) waypoint_of_step.push_back(k == lc.load.segment_increments[s] ? s + 1 : 0);
+    std::vector<double> force_at(path_.size(), 0.0);
+    std::vector<std::vector<double>> sensitivity_at(path_.size());
+    std::size_t step = 0;
+    sim.run([&](const IncrementRecord& r) {
+      const std::size_t waypoint = waypoint_of_step[step++];
+      if (waypoint == 0) return;
+      force_at[waypoint] = r.force;
+      if (jacobian) {
+        auto s = sim.force_sensitivities(parameters_);
+        if (!s) throw std::logic_error("forward sensitivities unavailable where they were planned");
+        sensitivity_at[waypoint] = std::move(*s);
+      }
+    });
+    for (std::size_t i = 0; i < points; ++i) values[i] = force_at[point_of_waypoint_[i]];
+    if (jacobian) {
+      jacobian->assign(points, std::vector<double>(parameters_.size(), 0.0));
+      for (std::size_t i = 0; i < points; ++i)
+        if (point_of_waypoint_[i] > 0) (*jacobian)[i] = sensitivity_at[point_of_waypoint_[i]];
+    }
+    return values;
+  }
+  sim.run();
+  // The imprint: the surface nodes' depth below the original surface, -v, between the nodes linear.
+  std::vector<double> r, depth;
+  for (const auto& c : sim.contact_boundary().candidates()) {
+    r.push_back(c.x);
+    depth.push_back(-sim.displacement()[static_cast<std::size_t>(c.equation)]);
+  }
+  for (std::size_t i = 0; i < points; ++i) {
+    const auto d = interpolate(r, depth, data_.abscissa[i]);
+    if (!d)
+      throw InputError(data_.file, fmt::format("row {}", i + 1),
+                       fmt::format("radius {} m is beyond the punch's reach ({} m) on this mesh", data_.abscissa[i],
+                                   r.empty() ? 0.0 : r.back()));
+    values[i] = *d;
+  }
+  return values;
+}
+
+std::vector<double> ForwardModel::run(const LoadCase& lc, std::vector<std::vector<double>>* jacobian, int& runs) const {
+  // A run that fails inside the fit is retried with steps a quarter, then a sixteenth as long;
+  // one that still fails is reported as a failure (the optimiser then shortens its own step),
+  // never as a result.
+  for (int attempt = 0;; ++attempt) {
+    ++runs;
+    try {
+      return run_once(lc, 1 << (2 * attempt), jacobian);
+    } catch (const SolverError&) {
+      if (attempt == 2) throw;
+    }
+  }
+}
+
+ModelEvaluation ForwardModel::evaluate(const std::vector<double>& theta, bool with_jacobian) const {
+  ModelEvaluation e;
+  const LoadCase lc = case_at(theta);
+  if (sensitivities_) {
+    e.values = run(lc, with_jacobian ? &e.jacobian : nullptr, e.forward_runs);
+    return e;
+  }
+  e.values = run(lc, nullptr, e.forward_runs);
+  if (!with_jacobian) return e;
+  e.jacobian.assign(e.values.size(), std::vector<double>(parameters_.size(), 0.0));
+  for (std::size_t j = 0; j < parameters_.size(); ++j) {
+    const double scale = theta[j] != 0.0 ? std::abs(theta[j]) : bounds_[j].second - bounds_[j].first;
+    double h = finite_difference_step * scale;
+    if (theta[j] + h > bounds_[j].second) h = -h;  // stay inside the bounds
+    std::vector<double> shifted = theta;
+    shifted[j] += h;
+    const std::vector<double> values = run(case_at(shifted), nullptr, e.forward_runs);
+    for (std::size_t i = 0; i < values.size(); ++i) e.jacobian[i][j] = (values[i] - e.values[i]) / h;
+  }
+  return e;
+}
+
+}  // namespace indentsim
