@@ -3,6 +3,7 @@
 // analysis says it must be (a sharp cone's loading curve, P = C alpha^2, holds one number), and
 // resolved by a second data set; bad problems refused with the key named.
 #include <cmath>
+#include <fstream>
 #include <random>
 #include <string>
 #include <vector>
@@ -12,6 +13,7 @@
 #include "indentsim/error.hpp"
 #include "indentsim/fit.hpp"
 #include "indentsim/load_case.hpp"
+#include "test_support.hpp"
 
 namespace indentsim {
 namespace {
@@ -162,6 +164,43 @@ TEST(Fit, ConeLoadingCurveAloneCannotSeparateYieldStressFromHardening) {
   EXPECT_NE(r.poorly_determined.find("material.n"), std::string::npos);
   // The weak combination is the one Kick's constant does not feel: both move together or against.
   EXPECT_GT(std::abs(r.weakest_direction[0]) * std::abs(r.weakest_direction[1]), 0.05);
+}
+
+class FitCli : public testing::CliTest {
+protected:
+  void SetUp() override {
+    CliTest::SetUp();
+    std::ofstream(dir_ / "case.toml") << to_toml(sphere(SceneKind::axisymmetric));
+    std::ofstream curve(dir_ / "curve.csv");
+    curve << "alpha,P\n";
+    for (int k = 1; k <= 5; ++k) curve << 4e-6 * k << "," << 10.0 * k * std::sqrt(k) << "\n";
+  }
+  std::string fit_args(const std::string& extra) const {
+    return "fit " + (dir_ / "case.toml").string() + " --data " + (dir_ / "curve.csv").string() + " " + extra;
+  }
+};
+
+TEST_F(FitCli, BadProblemsExitTwoNamingTheKeyBeforeAnyRun) {
+  expect_refused(fit_args("--free material.sigma"), "material.sigma");
+  expect_refused(fit_args("--free material.n --bounds material.n=0.6:0.1"), "material.n");
+  expect_refused(fit_args("--free material.n --bounds material.n=0.1:1.5"), "material.n");
+  expect_refused(fit_args("--free material.E --bounds material.E=-1:1e12"), "material.E");
+  expect_refused(fit_args("--free material.kappa"), "material.kappa");  // the case hardens by a power law
+  expect_refused(fit_args("--free material.n --bounds material.E=1e9:1e12"), "material.E");  // bounds of a fixed one
+  expect_refused(fit_args("--free material.e0,material.yield_stress"), "material.yield_stress");
+  expect_refused(fit_args(""), "--free");
+  expect_refused("fit " + (dir_ / "case.toml").string() + " --free material.n", "--data");
+  // Data deeper than the case's load path, and fewer points than parameters.
+  std::ofstream(dir_ / "deep.csv") << "alpha,P\n1e-5,1\n1e-4,2\n";
+  expect_refused("fit " + (dir_ / "case.toml").string() + " --data " + (dir_ / "deep.csv").string() + " --free material.n",
+                 "point 2");
+  std::ofstream(dir_ / "one.csv") << "alpha,P\n1e-5,1\n";
+  expect_refused("fit " + (dir_ / "case.toml").string() + " --data " + (dir_ / "one.csv").string() +
+                     " --free material.n,material.yield_stress",
+                 "curve");
+  // A fit file with a key it does not know.
+  std::ofstream(dir_ / "fit.toml") << "[fit]\nfree = [\"material.n\"]\nstart = 3\n[[data]]\ncase = \"case.toml\"\ncurve = \"curve.csv\"\n";
+  expect_refused("fit " + (dir_ / "fit.toml").string(), "fit.start");
 }
 
 }  // namespace

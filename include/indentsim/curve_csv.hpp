@@ -17,6 +17,9 @@ namespace indentsim {
 struct CurveColumns {
   std::string depth_column, force_column;  ///< header names; both "" for a two-column file
   std::string depth_unit, force_unit;      ///< "" : from the header
+  /// Units taken when neither given nor in the header ("" : such a file is refused).  The fit
+  /// reads its data in SI by default (m, and the case's force unit).
+  std::string default_depth_unit, default_force_unit;
 };
 
 struct LoadDepthCurve {

@@ -23,6 +23,7 @@
 #include "indentsim/checkpoint.hpp"
 #include "indentsim/curve_analysis.hpp"
 #include "indentsim/error.hpp"
+#include "indentsim/fit_files.hpp"
 #include "indentsim/file_system.hpp"
 #include "indentsim/interruption.hpp"
 #include "indentsim/io.hpp"
@@ -360,6 +361,46 @@ int command_analyze(const std::string& curve, std::vector<std::string> overrides
   return 0;
 }
 
+/// `indentsim fit`: material parameters from measured curves (fit.hpp); writes DIR/fit.json,
+/// DIR/fit_curves.csv, DIR/fitted_case.toml (one per data set beyond the first: fitted_case_K.toml)
+/// and the figure DIR/fit.png.  Bad input exits 2 before any run, with nothing written.
+int command_fit(FitCommandLine cl, bool quiet, bool plot) {
+  FitJob job = read_fit_job(cl);
+  const bool terminal = isatty(fileno(stderr)) != 0;
+  if (!quiet)
+    job.problem.settings.on_iteration = [&](const FitProgress& p) {
+      std::string values;
+      for (std::size_t j = 0; j < p.theta.size(); ++j)
+        values += fmt::format("  {}={:.5g}", key_of(job.problem.free[j].parameter), p.theta[j]);
+      fmt::print(stderr, "{}fit start {}/{} iteration {:>2}  cost {:.4e}{}  ({} runs){}", terminal ? "\r\033[K" : "", p.start,
+                 p.starts, p.iteration, p.cost, values, p.forward_runs, terminal ? "" : "\n");
+    };
+  const FitResult result = fit(job.problem);
+  if (!quiet && terminal) fmt::print(stderr, "\n");
+  const fs::path dir = job.out_dir;
+  fs::create_directories(dir);
+  write_file_atomically(dir / "fit.json", fit_json(job.problem, result).dump(2) + "\n");
+  write_file_atomically(dir / "fit_curves.csv", fit_curves_csv(job.problem, result));
+  for (std::size_t d = 0; d < result.data.size(); ++d)
+    write_file_atomically(dir / (d == 0 ? std::string("fitted_case.toml") : fmt::format("fitted_case_{}.toml", d + 1)),
+                          to_toml(result.data[d].fitted_case));
+  fmt::print("fit of {} data set(s), {} forward runs, {:.1f} s ({}):\n", job.problem.data.size(), result.forward_runs,
+             result.wall_seconds, result.data.front().gradients);
+  for (std::size_t j = 0; j < result.values.size(); ++j)
+    fmt::print("  {:<22} {:.6g} +- {:.3g}\n", key_of(job.problem.free[j].parameter), result.values[j], result.std_errors[j]);
+  fmt::print("  rms residual {:.3g}% (relative); condition number {:.3g}: {}\n", 100.0 * result.rms_relative,
+             result.condition_number, result.identifiable ? "identifiable" : "NOT identifiable");
+  if (!result.identifiable) fmt::print("  {}\n", result.poorly_determined);
+  fmt::print("results: {}\n", (dir / "fit.json").string());
+  if (plot) {
+    std::error_code ec;
+    const fs::path script = fs::read_symlink("/proc/self/exe", ec).parent_path() / "plot_fit.py";
+    if (!ec && fs::is_regular_file(script)) exec_python({script.string(), dir.string()}, dir.string());
+    fmt::print(stderr, "warning: the figure script plot_fit.py is not beside the executable; no figure\n");
+  }
+  return 0;
+}
+
 int command_keys(bool markdown) {
   if (markdown) {
     fmt::print("{}", keys_markdown());
@@ -428,6 +469,27 @@ int main(int argc, char** argv) {
                                                     "beside a measured file)");
   analyze->add_flag("--plot", analyze_options.plot, "also draw the figure (PNG and SVG beside analysis.json)");
 
+  FitCommandLine fit_options;
+  bool no_plot = false;
+  CLI::App* fit = app.add_subcommand(
+      "fit", "material parameters from measured force-depth curves (and imprints): a load case with --data, or a fit "
+             "file with [[data]] tables; writes DIR/fit.json, fit_curves.csv, fitted_case.toml, fit.png");
+  fit->add_option("input", fit_options.input, "load case (with --data) or fit file (TOML)")->required();
+  fit->add_option("--data", fit_options.data_files, "the measured curve (CSV: alpha [m], P [N] unless told)");
+  fit->add_option("--free", fit_options.free, "parameters to fit: material.E, .nu, .e0 or .yield_stress, .kappa, .n")
+      ->delimiter(',');
+  fit->add_option("--bounds", fit_options.bounds, "bounds of one parameter: material.n=0.01:0.6 (repeat)");
+  fit->add_option("--starts", fit_options.starts, "starts: the case's values, then points spread over the bounds");
+  fit->add_option("--set", fit_options.overrides, "override one key of every data set's case")->allow_extra_args(false)->take_all();
+  fit->add_option("--out", fit_options.out, "output folder (default out/fit, or [fit] out)");
+  fit->add_option("--depth-column", fit_options.columns.depth_column, "the curve's depth column (default alpha)");
+  fit->add_option("--force-column", fit_options.columns.force_column, "the curve's force column (default P)");
+  fit->add_option("--depth-unit", fit_options.columns.depth_unit, "nm, um, mm or m (else the header's, else m)");
+  fit->add_option("--force-unit", fit_options.columns.force_unit, "mN, uN, nN or N (else the header's, else N)");
+  fit->add_flag("--finite-differences", fit_options.finite_differences, "gradients by finite differences of whole runs");
+  fit->add_flag("--no-plot", no_plot, "write no figure");
+  fit->add_flag("--quiet,-q", quiet, "no progress line");
+
   bool markdown = false;
   CLI::App* keys = app.add_subcommand("keys", "list every load-case key: type, default, accepted values, unit, meaning");
   keys->add_flag("--markdown", markdown, "as the README's Markdown table");
@@ -471,6 +533,7 @@ int main(int argc, char** argv) {
     if (keys->parsed()) return command_keys(markdown);
     if (plot->parsed()) return command_plot(file, plot_step);
     if (analyze->parsed()) return command_analyze(file, overrides, analyze_options);
+    if (fit->parsed()) return command_fit(fit_options, quiet, !no_plot);
     if (run->parsed()) return command_run(file, overrides, out, quiet);
     if (resume->parsed()) return list ? command_list_checkpoints(file) : command_resume(file, overrides, out, quiet);
     return command_check(file, overrides);

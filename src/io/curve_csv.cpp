@@ -114,10 +114,11 @@ LoadDepthCurve read_curve_csv(const std::filesystem::path& file, const CurveColu
   // The units: given, or from the header.
   LoadDepthCurve curve;
   const auto unit_of = [&](const std::string& given, std::size_t column, const char* key, const char* what,
-                           double (*factor)(const std::string&), const char* accepted) {
+                           double (*factor)(const std::string&), const char* accepted, const std::string& fallback) {
     std::string unit = trim(given);
     if (unit.empty() && header_row && column < rows[*header_row].size())
       unit = name_and_unit(rows[*header_row][column]).second;
+    if (unit.empty()) unit = fallback;
     if (unit.empty())
       fail(key, fmt::format("the {} unit is missing: give {} ({}) or write it in the header, e.g. \"{} ({})\"",
                             what, key, accepted, what, std::string(accepted).substr(0, std::string(accepted).find(','))));
@@ -126,9 +127,9 @@ LoadDepthCurve read_curve_csv(const std::filesystem::path& file, const CurveColu
     return unit;
   };
   curve.depth_unit = unit_of(columns.depth_unit, depth_col, "curve.depth_unit", "depth", depth_unit_factor,
-                             "nm, um, mm, m");
+                             "nm, um, mm, m", columns.default_depth_unit);
   curve.force_unit = unit_of(columns.force_unit, force_col, "curve.force_unit", "force", force_unit_factor,
-                             "mN, uN, nN, N");
+                             "mN, uN, nN, N", columns.default_force_unit);
   const double depth_scale = depth_unit_factor(curve.depth_unit), force_scale = force_unit_factor(curve.force_unit);
 
   // The numbers: every row after the header, both columns finite numbers.
