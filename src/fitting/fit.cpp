@@ -228,7 +228,8 @@ FitResult fit(const FitProblem& problem) {
     StartOutcome outcome;
     outcome.start = start;
     for (std::size_t j = 0; j < p; ++j) outcome.result.push_back(x[j] * scale[j]);
-    outcome.cost = summary.final_cost;
+    // A start whose very first evaluation failed has no usable solution (its cost is not one).
+    outcome.cost = summary.IsSolutionUsable() ? summary.final_cost : std::numeric_limits<double>::infinity();
     outcome.iterations = static_cast<int>(summary.iterations.size()) - 1;
     outcome.converged = summary.termination_type == ceres::CONVERGENCE;
     outcome.message = summary.message;
