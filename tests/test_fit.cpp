@@ -59,21 +59,15 @@ std::vector<double> load_unload_depths(double deepest, int n, double lowest, int
   return a;
 }
 
+/// The small sphere scene with a power law given by its yield stress (400 MPa, n 0.2), pressed
+/// 50 um on a mesh pinned for that depth (the element left to the fit).
 LoadCase sphere(SceneKind scene) {
-  LoadCase lc;
-  lc.geometry.kind = scene;
-  lc.geometry.lx = lc.geometry.ly = 10e-3;
-  lc.punch.radius = 1e-3;
-  lc.material.model = MaterialModel::ilyushin;
-  lc.material.E = 200e9;
-  lc.material.nu = 0.3;
-  lc.material.hardening = HardeningLaw::power;
-  lc.material.yield_stress = 400e6;
-  lc.material.n = 0.2;
+  LoadCase lc = testing::small_sphere_case(scene, MaterialModel::ilyushin, HardeningLaw::power);
+  set_value(lc.material, MaterialParameter::yield_stress, 400e6);
   lc.load.path = {0.0, 50e-6};
   lc.load.increments = 20;
-  lc.mesh.contact_nodes = 10;
   lc.mesh.contact_half_width = 330e-6;
+  lc.mesh.element = ElementChoice::automatic;
   validate(lc);
   return lc;
 }

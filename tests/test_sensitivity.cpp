@@ -12,6 +12,7 @@
 #include "indentsim/load_case.hpp"
 #include "indentsim/material_parameter.hpp"
 #include "indentsim/simulation.hpp"
+#include "test_support.hpp"
 
 namespace indentsim {
 namespace {
@@ -63,24 +64,7 @@ void expect_sensitivities_match(const LoadCase& lc, const std::vector<MaterialPa
 }
 
 LoadCase sphere_case(SceneKind scene, MaterialModel model, HardeningLaw law) {
-  LoadCase lc;
-  lc.geometry.kind = scene;
-  lc.geometry.lx = lc.geometry.ly = 10e-3;
-  lc.punch.radius = 1e-3;
-  lc.material.model = model;
-  lc.material.E = 200e9;
-  lc.material.nu = 0.3;
-  lc.material.hardening = law;
-  lc.material.e0 = 1.5e-3;
-  lc.material.kappa = 0.8;
-  lc.material.n = 0.2;
-  lc.load.path = {0.0, 20e-6};
-  lc.load.increments = 5;
-  lc.mesh.contact_nodes = 10;
-  lc.mesh.contact_half_width = 150e-6;
-  lc.mesh.element = ElementChoice::q1;
-  validate(lc);
-  return lc;
+  return testing::small_sphere_case(scene, model, law);
 }
 
 TEST(ForceSensitivity, ElasticSphereInBothScenesMatchesFiniteDifferences) {

@@ -36,6 +36,30 @@ increments = 3
 contact_nodes = 8
 )";
 
+/// A sphere of radius 1 mm pressed 20 um into a 10 mm steel-like block (E 200 GPa, nu 0.3; e0
+/// 1.5e-3, kappa 0.8, n 0.2 for a plastic model) on a pinned mesh (10 contact nodes across
+/// a* = 150 um, Q1): the small scene the sensitivity and fit tests vary.
+inline LoadCase small_sphere_case(SceneKind scene, MaterialModel model, HardeningLaw law) {
+  LoadCase lc;
+  lc.geometry.kind = scene;
+  lc.geometry.lx = lc.geometry.ly = 10e-3;
+  lc.punch.radius = 1e-3;
+  lc.material.model = model;
+  lc.material.E = 200e9;
+  lc.material.nu = 0.3;
+  lc.material.hardening = law;
+  lc.material.e0 = 1.5e-3;
+  lc.material.kappa = 0.8;
+  lc.material.n = 0.2;
+  lc.load.path = {0.0, 20e-6};
+  lc.load.increments = 5;
+  lc.mesh.contact_nodes = 10;
+  lc.mesh.contact_half_width = 150e-6;
+  lc.mesh.element = ElementChoice::q1;
+  validate(lc);
+  return lc;
+}
+
 /// A fresh folder per test, removed afterwards.
 class TempDirTest : public ::testing::Test {
 protected:
