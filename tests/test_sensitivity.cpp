@@ -1,8 +1,9 @@
-// Forward sensitivities dP/d(theta) through the converged Newton system
-// (Simulation::force_sensitivities) against central finite differences of whole runs, for every
-// parameter the fit differentiates this way, in both scenes, elastic and plastic, with contact,
-// on the condensed and on the whole-mesh system.  The mesh is pinned (mesh.contact_half_width,
+// Forward sensitivities dP/d(theta) and du/d(theta) through the converged Newton system
+// (Simulation::sensitivities) against central finite differences of whole runs, for every
+// parameter the fit differentiates this way, in both scenes, elastic and plastic, loading and
+// Ilyushin's unloading branch, with contact, on the condensed and on the whole-mesh system.  The mesh is pinned (mesh.contact_half_width,
 // mesh.element) so that the finite differences see the same discretization.
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -10,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "indentsim/load_case.hpp"
+#include "indentsim/load_stepping.hpp"
 #include "indentsim/material_parameter.hpp"
 #include "indentsim/simulation.hpp"
 #include "test_support.hpp"
@@ -119,9 +121,73 @@ TEST(ForceSensitivity, ConeUnderBbarMatchesFiniteDifferences) {
   expect_sensitivities_match(lc, {MaterialParameter::E, MaterialParameter::e0, MaterialParameter::n}, 1e-5);
 }
 
+/// The final state of a load path that unloads, with its sensitivities: as the fit runs it, the
+/// sensitivities are taken at each reversal of the path too (they record the peak's d eps*/d theta).
+struct UnloadedState {
+  double force = 0.0, axis_depth = 0.0;  ///< P, and the surface's depth -v at the axis
+  std::optional<Simulation::Sensitivities> sensitivities;
+};
+
+UnloadedState unloaded_state(const LoadCase& lc, const std::vector<MaterialParameter>& parameters) {
+  Simulation sim(lc);
+  const std::vector<int> reversals = reversal_steps(plan_increments(lc.load));
+  sim.run([&](const IncrementRecord& r) {
+    if (!parameters.empty() && std::count(reversals.begin(), reversals.end(), r.step))
+      ASSERT_TRUE(sim.sensitivities(parameters).has_value());
+  });
+  UnloadedState s;
+  s.force = sim.contact().force;
+  const auto& axis = sim.contact_boundary().candidates().front();
+  s.axis_depth = -sim.displacement()[static_cast<std::size_t>(axis.equation)];
+  if (!parameters.empty()) s.sensitivities = sim.sensitivities(parameters);
+  if (s.sensitivities) {
+    for (auto& d : s.sensitivities->displacement) d = {-d[static_cast<std::size_t>(axis.equation)]};
+  }
+  return s;
+}
+
+/// Ilyushin's unloading branch: sigma = sigma_L(eps*) + D (eps - eps*) moves with theta through the
+/// peak strain as well; part way down (force) and after leaving the surface (the imprint's depth).
+TEST(ForceSensitivity, IlyushinUnloadingBranchAndImprintMatchFiniteDifferences) {
+  for (SceneKind scene : {SceneKind::plane_strain, SceneKind::axisymmetric}) {
+    LoadCase lc = sphere_case(scene, MaterialModel::ilyushin, HardeningLaw::power);
+    set_value(lc.material, MaterialParameter::yield_stress, value_of(lc.material, MaterialParameter::yield_stress));
+    const std::vector<MaterialParameter> ps{MaterialParameter::E, MaterialParameter::yield_stress, MaterialParameter::n};
+    for (const std::vector<double>& path : {std::vector<double>{0.0, 20e-6, 17e-6}, std::vector<double>{0.0, 20e-6, 0.0}}) {
+      lc.load.path = path;
+      lc.load.increments = 8;
+      validate(lc);
+      const bool imprint = path.back() == 0.0;
+      const UnloadedState base = unloaded_state(lc, ps);
+      ASSERT_TRUE(base.sensitivities.has_value());
+      const double measured = imprint ? base.axis_depth : base.force;
+      ASSERT_GT(measured, 0.0);
+      for (std::size_t i = 0; i < ps.size(); ++i) {
+        const double value = value_of(lc.material, ps[i]), h = 2e-5;
+        double sides[2];
+        for (int side = 0; side < 2; ++side) {
+          LoadCase perturbed = lc;
+          set_value(perturbed.material, ps[i], value * (1.0 + (side == 0 ? h : -h)));
+          const UnloadedState s = unloaded_state(perturbed, {});
+          sides[side] = imprint ? s.axis_depth : s.force;
+        }
+        const double numeric = (sides[0] - sides[1]) / (2.0 * h * measured);
+        const double exact =
+            (imprint ? base.sensitivities->displacement[i][0] : base.sensitivities->force[i]) * value / measured;
+        EXPECT_NEAR(exact, numeric, 1e-5 * std::max(1.0, std::abs(numeric)))
+            << key_of(ps[i]) << (imprint ? " (imprint depth)" : " (force, unloading)");
+        if (ps[i] != MaterialParameter::E || !imprint)
+          EXPECT_GT(std::abs(numeric), 1e-3) << key_of(ps[i]) << ": a parameter the test should feel";
+      }
+    }
+  }
+}
+
 TEST(ForceSensitivity, HistoryDependentStatesSayTheyNeedFiniteDifferences) {
   LoadCase j2 = sphere_case(SceneKind::axisymmetric, MaterialModel::j2, HardeningLaw::power);
   EXPECT_FALSE(final_force(j2, {MaterialParameter::e0}).sensitivities.has_value());
+  // An unloading state whose peak's sensitivities were never taken (a run without the fit's
+  // calls at the reversals, or one restored from a checkpoint).
   LoadCase unloaded = sphere_case(SceneKind::axisymmetric, MaterialModel::ilyushin, HardeningLaw::power);
   unloaded.load.path = {0.0, 20e-6, 15e-6};
   EXPECT_FALSE(final_force(unloaded, {MaterialParameter::e0}).sensitivities.has_value());

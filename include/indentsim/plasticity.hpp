@@ -8,6 +8,7 @@
 // Gauss points are elastic contributes exactly its cached matrix, so below the elastic limit
 // the result is the elastic model's.  Inelastic elements are integrated with 2x2 Gauss points:
 // stresses for the residual, consistent tangents for the Jacobian.
+#include <map>
 #include <memory>
 #include <optional>
 #include <unordered_map>
@@ -17,6 +18,9 @@
 #include "indentsim/material.hpp"
 
 namespace indentsim {
+
+/// One strain per Gauss point of the mesh (index = 4 * element + point).
+using PointStrains = std::vector<VoigtVector, Eigen::aligned_allocator<VoigtVector>>;
 
 /// The response of one Gauss point, with its committed history.
 struct PointResponse {
@@ -41,6 +45,11 @@ public:
                                                                  MaterialParameter /*parameter*/) const {
     return std::nullopt;
   }
+  /// Takes d eps / d theta at every point of the current (converged) state, from the state's
+  /// displacement sensitivity, for a law whose history is a function of the state at an earlier
+  /// time (Ilyushin's peak strain): afterwards stress_parameter_derivative can account for the
+  /// history's own dependence on theta.  Laws without such a history ignore it.
+  virtual void record_strain_derivatives(MaterialParameter /*parameter*/, PointStrains /*d_strain*/) {}
   /// Accepts `strain` as the converged state of the point.
   virtual void commit(std::size_t point, const VoigtVector& strain) = 0;
   /// The point has yielded at some time.
@@ -67,10 +76,16 @@ public:
   IlyushinPointLaw(const IlyushinLaw& law, bool unloading_rule, std::size_t points);
   bool elastic(std::size_t point, const VoigtVector& strain) const override;
   PointResponse respond(std::size_t point, const VoigtVector& strain) const override;
-  /// On loading the secant law has no history; on the unloading branch the peak strain eps* is
-  /// itself a function of the parameters (nullopt).
+  /// On loading the secant law has no history: d sigma_L(eps)/d theta.  On the unloading branch
+  /// sigma = sigma_L(eps*) + D (eps - eps*) depends on theta through the peak strain as well:
+  ///   d sigma / d theta = d sigma_L(eps*)/d theta + (C_L(eps*) - D) d eps*/d theta
+  /// (C_L the loading law's tangent; D does not depend on e0, kappa, n), with d eps*/d theta as
+  /// recorded at the peak (record_strain_derivatives); nullopt when it was not recorded.
   std::optional<VoigtVector> stress_parameter_derivative(std::size_t point, const VoigtVector& strain,
                                                          MaterialParameter parameter) const override;
+  /// While loading, the current state is the peak: d eps/d theta becomes d eps*/d theta.  The peak
+  /// moves with every loading commit, which forgets what was recorded.
+  void record_strain_derivatives(MaterialParameter parameter, PointStrains d_strain) override;
   void commit(std::size_t point, const VoigtVector& strain) override;
   bool has_yielded(std::size_t point) const override { return peak_intensity_[point] > law_.elastic_limit(); }
   void set_loading(bool beyond_previous_peak) override { loading_ = !unloading_rule_ || beyond_previous_peak; }
@@ -83,8 +98,9 @@ private:
   bool unloading_rule_;
   bool loading_ = true;
   ConstitutiveMatrix elastic_;
-  std::vector<VoigtVector, Eigen::aligned_allocator<VoigtVector>> peak_strain_;  // eps* per point
-  std::vector<double> peak_intensity_;                                           // e_u(eps*) per point
+  PointStrains peak_strain_;                                      // eps* per point
+  std::vector<double> peak_intensity_;                            // e_u(eps*) per point
+  std::map<MaterialParameter, PointStrains> peak_strain_derivative_;  // d eps*/d theta, as recorded
 };
 
 /// J2 flow theory with the hardening curve of an Ilyushin law; plastic strain and equivalent
@@ -140,6 +156,9 @@ public:
   /// false (df then unusable) when the law cannot give it at this state (PointLaw).
   bool add_parameter_derivative(const std::vector<ElementSlot>& slots, const double* u, MaterialParameter parameter,
                                 double* df) const;
+  /// Hands the law d eps/d theta at the Gauss points of the slots' elements, from a displacement
+  /// sensitivity du (free-equation vector of the slots' system): PointLaw::record_strain_derivatives.
+  void record_strain_derivatives(const std::vector<ElementSlot>& slots, const double* du, MaterialParameter parameter);
   /// The whole mesh's element slots (its free-equation system).
   const std::vector<ElementSlot>& slots() const { return slots_; }
 

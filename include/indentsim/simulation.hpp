@@ -99,14 +99,24 @@ public:
   /// after separation, the residual depth of the imprint where the punch left it.
   double free_surface_depth() const;
   std::vector<LayerForce> layer_forces() const;
-  /// dP/d(theta) at the current state for each parameter, by forward sensitivity through the
-  /// converged Newton system: at fixed depth F(u(theta); theta) = 0, so J du/d(theta) =
+  /// dP/d(theta) and du/d(theta) at the current state for each parameter, by forward sensitivity
+  /// through the converged Newton system: at fixed depth F(u(theta); theta) = 0, so J du/d(theta) =
   /// -dF/d(theta) (one factorization of J at u, one solve per parameter), and P = -f sum r_k over
   /// the contact nodes moves with dr_k = dF_k/d(theta) + K_t du/d(theta).  Available for the elastic
-  /// model and for Ilyushin's law while loading, for E, e0, yield_stress, kappa and n (E at fixed
-  /// e0, or at fixed yield_stress when the load case gives the material that way); nullopt
-  /// otherwise (nu, J2's history, Ilyushin's unloading branch): finite differences of whole runs
-  /// are then the way.  Counts its factorization.
+  /// model and for Ilyushin's law, for E, e0, yield_stress, kappa and n (E at fixed e0, or at fixed
+  /// yield_stress when the load case gives the material that way).  On Ilyushin's unloading branch
+  /// the stresses depend on theta through the peak strain too: a call at the peak (any loading
+  /// state) records d eps*/d theta for the unloading states after it, so the call must be made at
+  /// the last loading state before the path turns (ForwardModel calls it at every waypoint).
+  /// nullopt otherwise (nu, J2's history, an unloading state without the peak's record, or one
+  /// restored from a checkpoint): finite differences of whole runs are then the way.  Counts its
+  /// factorization.
+  struct Sensitivities {
+    std::vector<double> force;                      ///< dP/d(theta) [N or N/m per unit of theta]
+    std::vector<std::vector<double>> displacement;  ///< [parameter][equation] du/d(theta), whole mesh
+  };
+  std::optional<Sensitivities> sensitivities(const std::vector<MaterialParameter>& parameters);
+  /// The force part of sensitivities().
   std::optional<std::vector<double>> force_sensitivities(const std::vector<MaterialParameter>& parameters);
   long symbolic_analyses() const {
     return retired_symbolic_analyses_ + (newton_ ? newton_->total_symbolic_analyses() : 0);

@@ -39,14 +39,27 @@ PointResponse IlyushinPointLaw::respond(std::size_t point, const VoigtVector& st
   return r;
 }
 
-std::optional<VoigtVector> IlyushinPointLaw::stress_parameter_derivative(std::size_t, const VoigtVector& strain,
+std::optional<VoigtVector> IlyushinPointLaw::stress_parameter_derivative(std::size_t point, const VoigtVector& strain,
                                                                          MaterialParameter parameter) const {
-  if (!loading_) return std::nullopt;
-  return law_.stress_parameter_derivative(strain, parameter);
+  if (loading_) return law_.stress_parameter_derivative(strain, parameter);
+  const auto recorded = peak_strain_derivative_.find(parameter);
+  if (recorded == peak_strain_derivative_.end()) return std::nullopt;
+  // sigma = sigma_L(eps*) + D (eps - eps*): the law's own dependence at the peak strain, and the
+  // peak strain's, weighted by how much the loading law and the elastic branch differ there.
+  const VoigtVector& peak = peak_strain_[point];
+  const ConstitutiveMatrix loading_tangent = law_.respond(peak).tangent;
+  return VoigtVector(law_.stress_parameter_derivative(peak, parameter) +
+                     (loading_tangent - elastic_) * recorded->second[point]);
+}
+
+void IlyushinPointLaw::record_strain_derivatives(MaterialParameter parameter, PointStrains d_strain) {
+  if (!loading_ || d_strain.size() != peak_strain_.size()) return;
+  peak_strain_derivative_[parameter] = std::move(d_strain);
 }
 
 void IlyushinPointLaw::commit(std::size_t point, const VoigtVector& strain) {
   if (!loading_) return;
+  peak_strain_derivative_.clear();  // the peak moves
   peak_strain_[point] = strain;
   peak_intensity_[point] = strain_intensity(strain);
 }
@@ -218,6 +231,22 @@ bool InelasticBulk::add_parameter_derivative(const std::vector<ElementSlot>& slo
       if (slot.unknowns[a] >= 0) df[slot.unknowns[a]] += d_force[a];
   }
   return true;
+}
+
+void InelasticBulk::record_strain_derivatives(const std::vector<ElementSlot>& slots, const double* du,
+                                              MaterialParameter parameter) {
+  // The strains are linear in the displacements (B-bar included): d eps = B du.  Points outside
+  // the slots (a condensed far field, elastic by construction) keep d eps = 0; their stress on
+  // either branch is D eps and does not depend on eps*.
+  PointStrains d_strain(4 * static_cast<std::size_t>(mesh_.elements()), VoigtVector::Zero());
+  ElementVector due;
+  for (const ElementSlot& slot : slots) {
+    for (int a = 0; a < 8; ++a) due[a] = slot.unknowns[a] < 0 ? 0.0 : du[slot.unknowns[a]];
+    const std::array<VoigtVector, 4> strains = gauss_point_strains(mesh_, slot.ei, slot.ej, due);
+    const std::size_t first = 4 * static_cast<std::size_t>(mesh_.element(slot.ei, slot.ej));
+    for (std::size_t g = 0; g < 4; ++g) d_strain[first + g] = strains[g];
+  }
+  law_->record_strain_derivatives(parameter, std::move(d_strain));
 }
 
 void InelasticBulk::internal_force(const double* u, double* f) {

@@ -4,6 +4,7 @@
 #include "indentsim/interruption.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -476,6 +477,12 @@ double Simulation::free_surface_depth() const {
 }
 
 std::optional<std::vector<double>> Simulation::force_sensitivities(const std::vector<MaterialParameter>& parameters) {
+  std::optional<Sensitivities> s = sensitivities(parameters);
+  if (!s) return std::nullopt;
+  return std::move(s->force);
+}
+
+std::optional<Simulation::Sensitivities> Simulation::sensitivities(const std::vector<MaterialParameter>& parameters) {
   const MaterialInput& m = load_case_.material;
   for (MaterialParameter p : parameters)
     if (p == MaterialParameter::nu) return std::nullopt;  // nu also shapes the condensed far field
@@ -489,16 +496,19 @@ std::optional<std::vector<double>> Simulation::force_sensitivities(const std::ve
   bulk.internal_force(u_system.data(), force.data());
 
   // dF/d(theta) at fixed u for the model's own parameters: E at fixed e0 scales every stress
-  // (f_int is homogeneous of degree one in E, far field included); e0, kappa and n act only
-  // through omega in the inelastic near elements.
+  // (f_int is homogeneous of degree one in E, far field included, and on the unloading branch as
+  // well, where eps* does not move with E: the displacements of a depth-driven frictionless
+  // contact do not depend on E at fixed e0); e0, kappa and n act only in the inelastic near
+  // elements, through omega and, unloading, through eps*.
   const std::vector<MaterialParameter> base{MaterialParameter::E, MaterialParameter::e0, MaterialParameter::kappa,
                                             MaterialParameter::n};
   std::vector<std::vector<double>> d_force(base.size(), std::vector<double>(n, 0.0));
   for (std::size_t i = 0; i < n; ++i) d_force[0][i] = force[i] / m.E;
+  const std::vector<ElementSlot>* slots = nullptr;
   if (plastic_) {
-    const std::vector<ElementSlot>& slots = condensation_ ? condensation_->elements() : plastic_->slots();
+    slots = condensation_ ? &condensation_->elements() : &plastic_->slots();
     for (std::size_t b = 1; b < base.size(); ++b)
-      if (!plastic_->add_parameter_derivative(slots, u_system.data(), base[b], d_force[b].data())) return std::nullopt;
+      if (!plastic_->add_parameter_derivative(*slots, u_system.data(), base[b], d_force[b].data())) return std::nullopt;
   }
   // Right-hand sides -dF/d(theta): an active contact row c (v + alpha - g) does not depend on theta.
   const auto& candidates = contact.candidates();
@@ -512,6 +522,9 @@ std::optional<std::vector<double>> Simulation::force_sensitivities(const std::ve
       if (active[k]) rhs[candidates[k].equation] = 0.0;
   }
   newton_->solve_linearized(u_system, alpha_, du);
+  // While loading this state is the peak of any unloading that follows.
+  if (plastic_)
+    for (std::size_t b = 1; b < base.size(); ++b) plastic_->record_strain_derivatives(*slots, du[b].data(), base[b]);
   std::vector<double> tangent(static_cast<std::size_t>(pattern.nonzeros()));
   bulk.tangent(u_system.data(), tangent.data());
   std::vector<double> base_derivative(base.size(), 0.0), k_du(n);
@@ -523,21 +536,39 @@ std::optional<std::vector<double>> Simulation::force_sensitivities(const std::ve
     base_derivative[b] = contact.symmetry_factor() * sum;
   }
   // The user's parameters.  e0 = sigma_y / (3 mu) with mu = E / (2 (1 + nu)): at fixed E,
-  // d e0 / d sigma_y = e0 / sigma_y; at fixed sigma_y, d e0 / dE = -e0 / E.
-  const double dP_dE = base_derivative[0], dP_de0 = base_derivative[1];
+  // d e0 / d sigma_y = e0 / sigma_y; at fixed sigma_y, d e0 / dE = -e0 / E.  Each user parameter
+  // is a combination sum_b c_b (base b) of the base derivatives.
   const bool by_yield_stress = m.yield_stress.has_value();
-  std::vector<double> result;
+  std::vector<std::array<double, 4>> combination;
   for (MaterialParameter p : parameters) {
     switch (p) {
-      case MaterialParameter::E: result.push_back(by_yield_stress ? dP_dE - dP_de0 * m.e0 / m.E : dP_dE); break;
-      case MaterialParameter::e0: result.push_back(dP_de0); break;
+      case MaterialParameter::E: combination.push_back({1.0, by_yield_stress ? -m.e0 / m.E : 0.0, 0.0, 0.0}); break;
+      case MaterialParameter::e0: combination.push_back({0.0, 1.0, 0.0, 0.0}); break;
       case MaterialParameter::yield_stress:
-        result.push_back(dP_de0 * m.e0 / value_of(m, MaterialParameter::yield_stress));
+        combination.push_back({0.0, m.e0 / value_of(m, MaterialParameter::yield_stress), 0.0, 0.0});
         break;
-      case MaterialParameter::kappa: result.push_back(base_derivative[2]); break;
-      case MaterialParameter::n: result.push_back(base_derivative[3]); break;
+      case MaterialParameter::kappa: combination.push_back({0.0, 0.0, 1.0, 0.0}); break;
+      case MaterialParameter::n: combination.push_back({0.0, 0.0, 0.0, 1.0}); break;
       case MaterialParameter::nu: return std::nullopt;
     }
+  }
+  // The whole mesh's du/d(theta): the condensed far field is linear elastic, K_FF u_F = -K_FR u_R,
+  // so expanding is linear and applies to du as it does to u (for E, du = 0 anyway).
+  std::vector<std::vector<double>> du_mesh(base.size());
+  for (std::size_t b = 0; b < base.size(); ++b)
+    if (std::any_of(combination.begin(), combination.end(), [b](const auto& c) { return c[b] != 0.0; }))
+      from_system(du[b], du_mesh[b]);
+  Sensitivities result;
+  for (const auto& c : combination) {
+    double dP = 0.0;
+    std::vector<double> d_u(u_.size(), 0.0);
+    for (std::size_t b = 0; b < base.size(); ++b) {
+      if (c[b] == 0.0) continue;
+      dP += c[b] * base_derivative[b];
+      for (std::size_t i = 0; i < d_u.size(); ++i) d_u[i] += c[b] * du_mesh[b][i];
+    }
+    result.force.push_back(dP);
+    result.displacement.push_back(std::move(d_u));
   }
   return result;
 }
