@@ -11,10 +11,11 @@
 // with theta would make the curve jump.
 //
 // Gradients: forward sensitivities through the converged Newton system
-// (Simulation::force_sensitivities: one factorization and one solve per parameter at each data
-// depth) where the state is a function of the current depth and theta alone -- force-depth data
-// on loading, the elastic model or Ilyushin's law, any parameter but nu; one-sided finite
-// differences of whole runs elsewhere (J2's history, Ilyushin's unloading branch, nu, the imprint).
+// (Simulation::sensitivities: one factorization and one solve per parameter at each data depth,
+// and at each reversal of an imprint's path) for the elastic model and Ilyushin's law -- on
+// loading, and on the unloading branch through the peak strain's own sensitivity -- for any
+// parameter but nu; one-sided finite differences of whole runs for J2 flow theory (its history
+// would need the return map's sensitivity over every increment) and for nu.
 #include <string>
 #include <utility>
 #include <vector>

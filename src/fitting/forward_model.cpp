@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "indentsim/error.hpp"
+#include "indentsim/load_stepping.hpp"
 #include "indentsim/simulation.hpp"
 
 namespace indentsim {
@@ -24,21 +25,24 @@ int total_increments(const LoadInput& load) {
   return std::accumulate(load.segment_increments.begin(), load.segment_increments.end(), 0);
 }
 
-bool loading_only(const std::vector<double>& depths) {
-  for (std::size_t i = 1; i < depths.size(); ++i)
-    if (depths[i] <= depths[i - 1]) return false;
-  return true;
-}
+/// Where x0 falls in x (increasing): y(x0) = (1 - t) y[lower] + t y[lower + 1] (t = 0 at the last
+/// point), or nullopt outside [x.front(), x.back()].
+struct Bracket {
+  std::size_t lower = 0;
+  double t = 0.0;
+  template <class Values>
+  double operator()(const Values& y) const {
+    return t == 0.0 ? y[lower] : (1.0 - t) * y[lower] + t * y[lower + 1];
+  }
+};
 
-/// Linear interpolation of y(x) at x0 (x increasing), or nullopt outside [x.front(), x.back()].
-std::optional<double> interpolate(const std::vector<double>& x, const std::vector<double>& y, double x0) {
+std::optional<Bracket> bracket(const std::vector<double>& x, double x0) {
   if (x.empty() || x0 < x.front() || x0 > x.back()) return std::nullopt;
   const auto it = std::upper_bound(x.begin(), x.end(), x0);
-  if (it == x.end()) return y.back();
+  if (it == x.end()) return Bracket{x.size() - 1, 0.0};
   const std::size_t k = static_cast<std::size_t>(it - x.begin());
-  if (k == 0) return y.front();
-  const double t = (x0 - x[k - 1]) / (x[k] - x[k - 1]);
-  return y[k - 1] + t * (y[k] - y[k - 1]);
+  if (k == 0) return Bracket{0, 0.0};
+  return Bracket{k - 1, (x0 - x[k - 1]) / (x[k] - x[k - 1])};
 }
 
 }  // namespace
@@ -107,9 +111,7 @@ ForwardModel::ForwardModel(FitData data, std::vector<MaterialParameter> paramete
 
   // Forward sensitivities where the state is a function of depth and theta alone.
   if (finite_differences_only) fd_reason_ = "finite differences asked for";
-  else if (data_.kind == FitDataKind::imprint_profile) fd_reason_ = "an imprint follows the whole history";
   else if (user.material.model == MaterialModel::j2) fd_reason_ = "J2 flow theory carries its history";
-  else if (!loading_only(data_.abscissa)) fd_reason_ = "the data unloads (Ilyushin's unloading branch)";
   else if (std::count(parameters_.begin(), parameters_.end(), MaterialParameter::nu))
     fd_reason_ = "nu also shapes the condensed far field";
   sensitivities_ = fd_reason_.empty();
@@ -170,20 +172,45 @@ std::vector<double> ForwardModel::run_once(const LoadCase& base, int refinement,
     }
     return values;
   }
-  sim.run();
-  // The imprint: the surface nodes' depth below the original surface, -v, between the nodes linear.
+  // The imprint.  With derivatives: the sensitivities at every reversal of the path record the
+  // peak's d eps*/d theta for Ilyushin's unloading branch (Simulation::sensitivities), those at
+  // the end give d v/d theta.
+  const std::vector<double> targets = plan_increments(lc.load);
+  std::vector<char> reversal(targets.size(), 0);
+  if (jacobian)
+    for (int step : reversal_steps(targets)) reversal[static_cast<std::size_t>(step)] = 1;
+  sim.run([&](const IncrementRecord& r) {
+    const auto step = static_cast<std::size_t>(r.step);
+    if (jacobian && step < reversal.size() && reversal[step] && !sim.sensitivities(parameters_))
+      throw std::logic_error("forward sensitivities unavailable where they were planned");
+  });
+  std::optional<Simulation::Sensitivities> end;
+  if (jacobian) {
+    end = sim.sensitivities(parameters_);
+    if (!end) throw std::logic_error("forward sensitivities unavailable where they were planned");
+    jacobian->assign(points, std::vector<double>(parameters_.size(), 0.0));
+  }
+  // The surface nodes' depth below the original surface, -v, between the nodes linear.
   std::vector<double> r, depth;
+  std::vector<std::size_t> equation;
   for (const auto& c : sim.contact_boundary().candidates()) {
     r.push_back(c.x);
-    depth.push_back(-sim.displacement()[static_cast<std::size_t>(c.equation)]);
+    equation.push_back(static_cast<std::size_t>(c.equation));
+    depth.push_back(-sim.displacement()[equation.back()]);
   }
   for (std::size_t i = 0; i < points; ++i) {
-    const auto d = interpolate(r, depth, data_.abscissa[i]);
-    if (!d)
+    const auto at = bracket(r, data_.abscissa[i]);
+    if (!at)
       throw InputError(data_.file, fmt::format("row {}", i + 1),
                        fmt::format("radius {} m is beyond the punch's reach ({} m) on this mesh", data_.abscissa[i],
                                    r.empty() ? 0.0 : r.back()));
-    values[i] = *d;
+    values[i] = (*at)(depth);
+    if (jacobian)
+      for (std::size_t j = 0; j < parameters_.size(); ++j) {
+        std::vector<double> d_depth(equation.size());
+        for (std::size_t k = 0; k < equation.size(); ++k) d_depth[k] = -end->displacement[j][equation[k]];
+        (*jacobian)[i][j] = (*at)(d_depth);
+      }
   }
   return values;
 }
