@@ -4,7 +4,6 @@
 // resolved by a second data set; bad problems refused with the key named.
 #include <cmath>
 #include <fstream>
-#include <random>
 #include <string>
 #include <vector>
 
@@ -17,34 +16,6 @@
 
 namespace indentsim {
 namespace {
-
-/// The data a measurement of `truth` would give at `abscissa`, with Gaussian noise of
-/// `noise` times the largest value (an instrument's noise floor), seeded.
-FitData synthetic(const LoadCase& truth, FitDataKind kind, const std::vector<double>& abscissa,
-                  const std::vector<FreeParameter>& free, double noise, unsigned seed) {
-  FitData d;
-  d.kind = kind;
-  d.file = "synthetic";
-  d.load_case = truth;
-  d.abscissa = abscissa;
-  d.values.assign(abscissa.size(), 1.0);
-  std::vector<MaterialParameter> ps;
-  std::vector<std::pair<double, double>> bounds;
-  std::vector<double> theta;
-  for (const auto& f : free) {
-    ps.push_back(f.parameter);
-    bounds.emplace_back(f.lower, f.upper);
-    theta.push_back(value_of(truth.material, f.parameter));
-  }
-  const ForwardModel model(d, ps, bounds, false);
-  d.values = model.evaluate(theta, false).values;
-  double largest = 0.0;
-  for (double v : d.values) largest = std::max(largest, std::abs(v));
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> gauss(0.0, noise * largest);
-  for (double& v : d.values) v += gauss(rng);
-  return d;
-}
 
 std::vector<double> depths(double deepest, int n) {
   std::vector<double> a;
@@ -118,13 +89,13 @@ FitProblem sphere_and_cone(SceneKind scene, bool with_sphere, bool with_cone, in
   problem.free = yield_and_hardening;
   if (with_sphere) {
     const LoadCase truth = sphere(scene);
-    FitData d = synthetic(truth, FitDataKind::force_depth_curve, depths(20e-6, 20), problem.free, 0.005, 1);
+    FitData d = synthetic_data(truth, FitDataKind::force_depth_curve, depths(20e-6, 20), problem.free, 0.005, 1);
     d.load_case = started_away(truth, problem.free, 2.0);
     problem.data.push_back(d);
   }
   if (with_cone) {
     const LoadCase truth = cone(scene);
-    FitData d = synthetic(truth, FitDataKind::force_depth_curve, depths(1e-6, cone_points), problem.free, 0.005, 2);
+    FitData d = synthetic_data(truth, FitDataKind::force_depth_curve, depths(1e-6, cone_points), problem.free, 0.005, 2);
     d.load_case = started_away(truth, problem.free, 2.0);
     problem.data.push_back(d);
   }
@@ -158,6 +129,25 @@ TEST(Fit, ConeLoadingCurveAloneCannotSeparateYieldStressFromHardening) {
   EXPECT_NE(r.poorly_determined.find("material.n"), std::string::npos);
   // The weak combination is the one Kick's constant does not feel: both move together or against.
   EXPECT_GT(std::abs(r.weakest_direction[0]) * std::abs(r.weakest_direction[1]), 0.05);
+}
+
+TEST(Fit, ConeBecomesIdentifiableWithItsImprint) {
+  // The residual imprint after unloading (Bolzon et al. 2004) holds what the loading curve does
+  // not: the same pair as above, with the imprint's profile added, is determined.
+  FitProblem problem = sphere_and_cone(SceneKind::axisymmetric, false, true, 10);
+  LoadCase truth = cone(SceneKind::axisymmetric);
+  truth.load.path = {0.0, 1e-6, 0.0};
+  truth.load.increments = 30;
+  validate(truth);
+  std::vector<double> radii;
+  for (int k = 0; k < 12; ++k) radii.push_back(0.3e-6 * k);
+  FitData imprint = synthetic_data(truth, FitDataKind::imprint_profile, radii, problem.free, 0.005, 3);
+  imprint.load_case = started_away(truth, problem.free, 2.0);
+  problem.data.push_back(imprint);
+  const FitResult r = fit(problem);
+  print(r, problem.free);
+  expect_round_trip(r, truth, problem.free);
+  EXPECT_EQ(r.data[1].gradients, "forward sensitivities");  // through Ilyushin's unloading branch
 }
 
 class FitCli : public testing::CliTest {

@@ -94,6 +94,13 @@ struct FitResult {
   bool mesh_replanned = false;
 };
 
+/// The data a measurement of `truth` would give at `abscissa` (depths of a curve, or radii of an
+/// imprint), with Gaussian noise of standard deviation `noise` times the largest |value| (an
+/// instrument's noise floor; seeded), computed on the mesh and element a fit of `free` would use:
+/// for round trips, identifiability studies before an experiment, and the benchmark.
+FitData synthetic_data(const LoadCase& truth, FitDataKind kind, const std::vector<double>& abscissa,
+                       const std::vector<FreeParameter>& free, double noise, unsigned seed);
+
 /// Checks the problem (free keys, bounds inside the physical range and around sensible values,
 /// enough points) and fits.  Throws InputError for a problem that cannot be posed, SolverError when
 /// no start reaches a single successful evaluation.

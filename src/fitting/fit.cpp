@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <random>
 #include <limits>
 #include <memory>
 #include <set>
@@ -166,6 +167,32 @@ void check_problem(const FitProblem& problem) {
 std::string percent(double fraction) { return fmt::format("{:.3g}%", 100.0 * fraction); }
 
 }  // namespace
+
+FitData synthetic_data(const LoadCase& truth, FitDataKind kind, const std::vector<double>& abscissa,
+                       const std::vector<FreeParameter>& free, double noise, unsigned seed) {
+  FitData d;
+  d.kind = kind;
+  d.file = "synthetic";
+  d.load_case = truth;
+  d.abscissa = abscissa;
+  d.values.assign(abscissa.size(), 0.0);
+  std::vector<MaterialParameter> parameters;
+  std::vector<std::pair<double, double>> bounds;
+  std::vector<double> theta;
+  for (const FreeParameter& f : free) {
+    parameters.push_back(f.parameter);
+    bounds.emplace_back(f.lower, f.upper);
+    theta.push_back(value_of(truth.material, f.parameter));
+  }
+  const ForwardModel model(d, parameters, bounds, false);
+  d.values = model.evaluate(theta, false).values;
+  double largest = 0.0;
+  for (double v : d.values) largest = std::max(largest, std::abs(v));
+  std::mt19937 random(seed);
+  std::normal_distribution<double> gauss(0.0, noise * largest);
+  for (double& v : d.values) v += gauss(random);
+  return d;
+}
 
 FitResult fit(const FitProblem& problem) {
   const auto start_time = std::chrono::steady_clock::now();
