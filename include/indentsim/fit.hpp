@@ -30,6 +30,9 @@
 namespace indentsim {
 
 inline constexpr double identifiability_condition_limit = 100.0;
+/// The coarse phase (FitSettings::coarse_first) runs where every data set's mesh has at least
+/// this many contact nodes (half of them is then still a resolved contact).
+inline constexpr int coarse_first_min_contact_nodes = 12;
 
 struct FreeParameter {
   MaterialParameter parameter = MaterialParameter::E;
@@ -41,14 +44,19 @@ struct FitProgress {
   int start = 0, starts = 1, iteration = 0;
   double cost = 0.0;
   std::vector<double> theta;
-  int forward_runs = 0;
+  int forward_runs = 0;  ///< on the data sets' own meshes
+  int coarse_runs = 0;   ///< on the coarse phase's meshes
+  std::string phase;     ///< StartOutcome::phase
 };
 
 struct FitSettings {
   int starts = 1;              ///< the load case's values, then points spread over the bounds
   int max_iterations = 50;     ///< Levenberg-Marquardt iterations per start
   bool finite_differences = false;  ///< force finite differences (the benchmark compares both)
-  bool replan_mesh = true;     ///< re-plan the mesh at the result and polish once (see fit())
+  /// Levenberg-Marquardt travels on meshes with half the contact nodes, then the fine meshes are
+  /// planned at its optimum and the result polished there (see fit()).
+  bool coarse_first = true;
+  bool replan_mesh = true;     ///< without the coarse phase: re-plan the mesh at the result and polish
   std::function<void(const FitProgress&)> on_iteration;
 };
 
@@ -74,6 +82,9 @@ struct StartOutcome {
   int iterations = 0;
   bool converged = false;
   std::string message;  ///< Ceres' own words
+  /// "coarse" (a start on the coarse phase's meshes), "fine" (a start on the data sets' own
+  /// meshes), "polish" (from the coarse or first result, on meshes planned there)
+  std::string phase = "fine";
 };
 
 struct FitResult {
@@ -88,10 +99,12 @@ struct FitResult {
   double cost = 0.0;                      ///< 1/2 sum r^2
   double rms_relative = 0.0;              ///< sqrt(sum r^2 / sum w^2): the weighted relative misfit
   std::vector<DataSetFit> data;
-  int forward_runs = 0, iterations = 0;
+  int forward_runs = 0;  ///< runs on the data sets' own meshes
+  int coarse_runs = 0;   ///< runs on the coarse phase's meshes (contact_nodes / 2)
+  int iterations = 0;    ///< Levenberg-Marquardt iterations over every start and phase
   double wall_seconds = 0.0;
   std::vector<StartOutcome> starts;
-  bool mesh_replanned = false;
+  bool mesh_replanned = false;  ///< the meshes were planned at a (coarse) result, not at the start
 };
 
 /// The data a measurement of `truth` would give at `abscissa` (depths of a curve, or radii of an

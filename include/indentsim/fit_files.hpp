@@ -41,6 +41,7 @@ struct FitCommandLine {
   std::optional<int> starts;
   std::string out;
   bool finite_differences = false;
+  bool single_level = false;  ///< --single-level: no coarse phase (FitSettings::coarse_first)
 };
 
 struct FitJob {

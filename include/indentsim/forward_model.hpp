@@ -50,12 +50,13 @@ struct ModelEvaluation {
 
 class ForwardModel {
 public:
-  /// Fixes the mesh at the load case's own material (its pilot run, for a plastic case) and the
-  /// element over `bounds`, and lays the load path through the data.  Throws InputError when the
-  /// scene cannot produce the data (depths beyond the case's, an imprint that never unloads, radii
-  /// off the surface).
+  /// Fixes the mesh at `plan_at` (empty: the load case's own material; its pilot run, for a plastic
+  /// case) and the element over `bounds`, and lays the load path through the data.  Throws
+  /// InputError when the scene cannot produce the data (depths beyond the case's, an imprint that
+  /// never unloads, radii off the surface).
   ForwardModel(FitData data, std::vector<MaterialParameter> parameters,
-               const std::vector<std::pair<double, double>>& bounds, bool finite_differences_only);
+               const std::vector<std::pair<double, double>>& bounds, bool finite_differences_only,
+               const std::vector<double>& plan_at = {});
 
   /// The model at theta (in the order of the parameters).  Throws SolverError when a run fails
   /// even after two retries with steps a quarter as long.

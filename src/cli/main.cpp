@@ -372,8 +372,10 @@ int command_fit(FitCommandLine cl, bool quiet, bool plot) {
       std::string values;
       for (std::size_t j = 0; j < p.theta.size(); ++j)
         values += fmt::format("  {}={:.5g}", key_of(job.problem.free[j].parameter), p.theta[j]);
-      fmt::print(stderr, "{}fit start {}/{} iteration {:>2}  cost {:.4e}{}  ({} runs){}", terminal ? "\r\033[K" : "", p.start,
-                 p.starts, p.iteration, p.cost, values, p.forward_runs, terminal ? "" : "\n");
+      const std::string where = p.phase == "polish" ? std::string("fit polish")
+                                                    : fmt::format("fit {} start {}/{}", p.phase, p.start, p.starts);
+      fmt::print(stderr, "{}{} iteration {:>2}  cost {:.4e}{}  ({} runs, {} coarse){}", terminal ? "\r\033[K" : "",
+                 where, p.iteration, p.cost, values, p.forward_runs, p.coarse_runs, terminal ? "" : "\n");
     };
   const FitResult result = fit(job.problem);
   if (!quiet && terminal) fmt::print(stderr, "\n");
@@ -384,8 +386,9 @@ int command_fit(FitCommandLine cl, bool quiet, bool plot) {
   for (std::size_t d = 0; d < result.data.size(); ++d)
     write_file_atomically(dir / (d == 0 ? std::string("fitted_case.toml") : fmt::format("fitted_case_{}.toml", d + 1)),
                           to_toml(result.data[d].fitted_case));
-  fmt::print("fit of {} data set(s), {} forward runs, {:.1f} s ({}):\n", job.problem.data.size(), result.forward_runs,
-             result.wall_seconds, result.data.front().gradients);
+  fmt::print("fit of {} data set(s), {} forward runs (and {} on the coarse meshes), {:.1f} s ({}):\n",
+             job.problem.data.size(), result.forward_runs, result.coarse_runs, result.wall_seconds,
+             result.data.front().gradients);
   for (std::size_t j = 0; j < result.values.size(); ++j)
     fmt::print("  {:<22} {:.6g} +- {:.3g}\n", key_of(job.problem.free[j].parameter), result.values[j], result.std_errors[j]);
   fmt::print("  rms residual {:.3g}% (relative); condition number {:.3g}: {}\n", 100.0 * result.rms_relative,
@@ -487,6 +490,8 @@ int main(int argc, char** argv) {
   fit->add_option("--depth-unit", fit_options.columns.depth_unit, "nm, um, mm or m (else the header's, else m)");
   fit->add_option("--force-unit", fit_options.columns.force_unit, "mN, uN, nN or N (else the header's, else N)");
   fit->add_flag("--finite-differences", fit_options.finite_differences, "gradients by finite differences of whole runs");
+  fit->add_flag("--single-level", fit_options.single_level,
+                "fit on the cases' own meshes throughout (no coarse phase on half the contact nodes)");
   fit->add_flag("--no-plot", no_plot, "write no figure");
   fit->add_flag("--quiet,-q", quiet, "no progress line");
 

@@ -48,7 +48,8 @@ std::optional<Bracket> bracket(const std::vector<double>& x, double x0) {
 }  // namespace
 
 ForwardModel::ForwardModel(FitData data, std::vector<MaterialParameter> parameters,
-                           const std::vector<std::pair<double, double>>& bounds, bool finite_differences_only)
+                           const std::vector<std::pair<double, double>>& bounds, bool finite_differences_only,
+                           const std::vector<double>& plan_at)
     : data_(std::move(data)), parameters_(std::move(parameters)), bounds_(bounds) {
   const LoadCase& user = data_.load_case;
   const std::string& file = data_.file;
@@ -105,8 +106,9 @@ ForwardModel::ForwardModel(FitData data, std::vector<MaterialParameter> paramete
     }
     prepared_.mesh.element = bbar ? ElementChoice::bbar : ElementChoice::q1;
   }
-  std::vector<double> start;
-  for (MaterialParameter p : parameters_) start.push_back(value_of(user.material, p));
+  std::vector<double> start = plan_at;
+  if (start.empty())
+    for (MaterialParameter p : parameters_) start.push_back(value_of(user.material, p));
   replan_mesh(start);
 
   // Forward sensitivities where the state is a function of depth and theta alone.

@@ -244,6 +244,7 @@ FitJob read_fit_job(const FitCommandLine& cl) {
   if (!cl.out.empty()) job.out_dir = cl.out;
   if (job.out_dir.empty()) job.out_dir = "out/fit";
   problem.settings.finite_differences = cl.finite_differences;
+  if (cl.single_level) problem.settings.coarse_first = false;
 
   if (free.empty()) throw InputError(cl.input, "--free", "name the parameters to fit, e.g. --free material.yield_stress,material.n");
   for (const auto& key : free) {
@@ -334,13 +335,15 @@ nlohmann::json fit_json(const FitProblem& problem, const FitResult& r) {
   }
   j["data"] = data;
   j["forward_runs"] = r.forward_runs;
+  j["coarse_runs"] = r.coarse_runs;
   j["iterations"] = r.iterations;
   j["wall_s"] = r.wall_seconds;
   j["mesh_replanned"] = r.mesh_replanned;
   json starts = json::array();
   for (const auto& s : r.starts)
     starts.push_back({{"start", s.start}, {"result", s.result}, {"cost", number(s.cost)}, {"iterations", s.iterations},
-                      {"converged", s.converged}, {"message", s.message}});
+                      {"converged", s.converged}, {"message", s.message},
+                      {"phase", s.phase}});
   j["starts"] = starts;
   return j;
 }
