@@ -218,6 +218,11 @@ TEST_F(FitCli, BadProblemsExitTwoNamingTheKeyBeforeAnyRun) {
   // A fit file with a key it does not know.
   std::ofstream(dir_ / "fit.toml") << "[fit]\nfree = [\"material.n\"]\nstart = 3\n[[data]]\ncase = \"case.toml\"\ncurve = \"curve.csv\"\n";
   expect_refused("fit " + (dir_ / "fit.toml").string(), "fit.start");
+  // Keys it knows, of the wrong type.
+  std::ofstream(dir_ / "typed.toml") << "[fit]\nfree = [\"material.n\"]\nstarts = \"3\"\n[[data]]\ncase = \"case.toml\"\ncurve = \"curve.csv\"\n";
+  expect_refused("fit " + (dir_ / "typed.toml").string(), "fit.starts");
+  std::ofstream(dir_ / "level.toml") << "[fit]\nfree = [\"material.n\"]\nsingle_level = 1\n[[data]]\ncase = \"case.toml\"\ncurve = \"curve.csv\"\n";
+  expect_refused("fit " + (dir_ / "level.toml").string(), "fit.single_level");
 }
 
 }  // namespace

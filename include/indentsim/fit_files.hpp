@@ -8,6 +8,7 @@
 //   bounds = { "material.n" = [0.01, 0.6] }   # optional; physically safe defaults otherwise
 //   starts = 3                                  # optional
 //   out = "out/fit"                             # optional
+//   single_level = true                         # optional: no coarse phase (--single-level)
 //   [[data]]                                    # a force-depth curve
 //   case = "sphere.toml"                        # relative to the fit file
 //   curve = "sphere.csv"                        # columns alpha [m] and P [N] unless told:

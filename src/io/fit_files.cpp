@@ -165,8 +165,9 @@ FitJob read_fit_job(const FitCommandLine& cl) {
     if (!fit) throw InputError(cl.input, "fit", "a fit file needs a [fit] table (free = [...])");
     for (const auto& [k, v] : *fit) {
       const std::string key(k.str());
-      if (key != "free" && key != "bounds" && key != "starts" && key != "out")
-        throw InputError(cl.input, "fit." + printable(key, 40), "is not a fit key (free, bounds, starts, out)");
+      if (key != "free" && key != "bounds" && key != "starts" && key != "out" && key != "single_level")
+        throw InputError(cl.input, "fit." + printable(key, 40),
+                         "is not a fit key (free, bounds, starts, out, single_level)");
     }
     if (const auto* list = (*fit)["free"].as_array()) {
       for (const auto& item : *list) {
@@ -185,8 +186,21 @@ FitJob read_fit_job(const FitCommandLine& cl) {
         bounds.emplace_back(std::string(k.str()), std::pair{*lo, *hi});
       }
     }
-    if (auto s = (*fit)["starts"].value<int64_t>()) problem.settings.starts = static_cast<int>(*s);
-    if (auto o = (*fit)["out"].value<std::string>()) job.out_dir = *o;
+    if (const auto* node = (*fit)["starts"].node()) {
+      const auto s = node->value_exact<int64_t>();
+      if (!s) throw InputError(cl.input, "fit.starts", "must be an integer");
+      problem.settings.starts = static_cast<int>(std::clamp<int64_t>(*s, -1, 1000));
+    }
+    if (const auto* node = (*fit)["out"].node()) {
+      const auto o = node->value_exact<std::string>();
+      if (!o) throw InputError(cl.input, "fit.out", "must be a folder name (a string)");
+      job.out_dir = *o;
+    }
+    if (const auto* node = (*fit)["single_level"].node()) {
+      const auto b = node->value_exact<bool>();
+      if (!b) throw InputError(cl.input, "fit.single_level", "must be true or false");
+      if (*b) problem.settings.coarse_first = false;
+    }
     const toml::array* data = root["data"].as_array();
     if (!data || data->empty()) throw InputError(cl.input, "data", "a fit file needs at least one [[data]] table");
     int index = 0;
