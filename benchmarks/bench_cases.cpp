@@ -21,16 +21,11 @@
 #include <fmt/format.h>
 
 #include "indentsim/simulation.hpp"
+#include "bench_support.hpp"
 
 using namespace indentsim;
 
-namespace {
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-}  // namespace
+using timing::median;
 
 void bench(const std::string& file, int repeats) {
   fmt::print("\n{} ({} repeats, medians)\n", file, repeats);

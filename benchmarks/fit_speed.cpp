@@ -24,20 +24,14 @@
 
 #include "indentsim/fit.hpp"
 #include "indentsim/load_case.hpp"
+#include "bench_support.hpp"
 
 using namespace indentsim;
 
 namespace {
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
+using timing::median;
+using timing::seconds_since;
 
 std::vector<FreeParameter> free_parameters(const LoadCase& truth, const std::vector<MaterialParameter>& keys) {
   std::vector<FreeParameter> free;
@@ -93,8 +87,8 @@ int main(int argc, char** argv) {
                repeats, median(with_sensitivities), median(with_sensitivities) / unit);
     if (runs_only) return 0;
 
-    fmt::print("{:<16} {:<14} {:<13} {:>5} {:>7} {:>5} {:>8} {:>9}  {}\n", "free", "gradients", "levels", "runs",
-               "coarse", "iter", "wall_s", "wall/run", "result (+- standard error; truth 210 GPa, 500 MPa, 0.15)");
+    fmt::print("{:<16} {:<14} {:<13} {:>5} {:>7} {:>5} {:>8} {:>9} {:>6}  {}\n", "free", "gradients", "levels", "runs",
+               "coarse", "iter", "wall_s", "wall/run", "cond", "result (+- standard error; truth 210 GPa, 500 MPa, 0.15)");
     struct Variant {
       bool finite_differences, coarse_first;
     };
@@ -117,9 +111,10 @@ int main(int argc, char** argv) {
           names += key_of(keys[j]).substr(9);  // without "material."
           values += fmt::format("{}{:.5g} +- {:.2g}", j ? ", " : "", r.values[j], r.std_errors[j]);
         }
-        fmt::print("{:<16} {:<14} {:<13} {:>5} {:>7} {:>5} {:>8.1f} {:>9.1f}  {}\n", names,
+        fmt::print("{:<16} {:<14} {:<13} {:>5} {:>7} {:>5} {:>8.1f} {:>9.1f} {:>6.3g}  {}\n", names,
                    v.finite_differences ? "finite diff." : "sensitivities", v.coarse_first ? "coarse, fine" : "fine only",
-                   r.forward_runs, r.coarse_runs, r.iterations, r.wall_seconds, r.wall_seconds / unit, values);
+                   r.forward_runs, r.coarse_runs, r.iterations, r.wall_seconds, r.wall_seconds / unit,
+                   r.condition_number, values);
         std::fflush(stdout);
       }
     }

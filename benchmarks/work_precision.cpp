@@ -34,7 +34,7 @@ struct Row {
 
 Row measure(const std::string& label, const std::string& file, int contact_nodes, int increments,
             const std::string& linear, std::vector<std::string> overrides = {}) {
-  for (const std::string key : {"mesh.contact_nodes=" + std::to_string(contact_nodes),
+  for (const std::string& key : {"mesh.contact_nodes=" + std::to_string(contact_nodes),
                                 "load.increments=" + std::to_string(increments), "solver.linear=" + linear,
                                 std::string("output.checkpoint_every=0")})
     overrides.push_back(key);
