@@ -16,6 +16,10 @@ std::vector<double> plan_increments(const LoadInput& load);
 /// The planned increments (indices into `targets`) where the load path reverses: every peak and
 /// every valley strictly inside the path.
 std::vector<int> reversal_steps(const std::vector<double>& targets);
+/// The planned increments after which the depth falls (holds and equal depths included: the
+/// last increment before each descent).  Where the path is at its deepest so far, that state is
+/// the peak Ilyushin's unloading branch starts from.
+std::vector<int> descent_starts(const std::vector<double>& targets);
 
 /// One converged increment, as written to curve.csv.
 struct IncrementRecord {

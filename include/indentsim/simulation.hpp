@@ -107,15 +107,18 @@ public:
   /// yield_stress when the load case gives the material that way).  On Ilyushin's unloading branch
   /// the stresses depend on theta through the peak strain too: a call at the peak (any loading
   /// state) records d eps*/d theta for the unloading states after it, so the call must be made at
-  /// the last loading state before the path turns (ForwardModel calls it at every waypoint).
+  /// the last loading state before the path turns (ForwardModel calls it at every data depth of a
+  /// curve, and at each descent_starts() increment of an imprint's path).
   /// nullopt otherwise (nu, J2's history, an unloading state without the peak's record, or one
   /// restored from a checkpoint): finite differences of whole runs are then the way.  Counts its
   /// factorization.
   struct Sensitivities {
     std::vector<double> force;                      ///< dP/d(theta) [N or N/m per unit of theta]
     std::vector<std::vector<double>> displacement;  ///< [parameter][equation] du/d(theta), whole mesh
+                                                    ///< (empty unless asked for)
   };
-  std::optional<Sensitivities> sensitivities(const std::vector<MaterialParameter>& parameters);
+  std::optional<Sensitivities> sensitivities(const std::vector<MaterialParameter>& parameters,
+                                             bool with_displacement = false);
   /// The force part of sensitivities().
   std::optional<std::vector<double>> force_sensitivities(const std::vector<MaterialParameter>& parameters);
   long symbolic_analyses() const {

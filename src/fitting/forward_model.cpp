@@ -153,6 +153,7 @@ std::vector<double> ForwardModel::run_once(const LoadCase& base, int refinement,
     std::vector<std::size_t> waypoint_of_step{0};
     for (std::size_t s = 0; s < lc.load.segment_increments.size(); ++s)
       for (int k = 1; k <= lc.load.segment_increments[s]; ++k) waypoint_of_step.push_back(k == lc.load.segment_increments[s] ? s + 1 : 0);
+    bool available = true;  // sensitivities at every data depth (else the jacobian stays empty)
     std::vector<double> force_at(path_.size(), 0.0);
     std::vector<std::vector<double>> sensitivity_at(path_.size());
     std::size_t step = 0;
@@ -160,37 +161,39 @@ std::vector<double> ForwardModel::run_once(const LoadCase& base, int refinement,
       const std::size_t waypoint = waypoint_of_step[step++];
       if (waypoint == 0) return;
       force_at[waypoint] = r.force;
-      if (jacobian) {
+      if (jacobian && available) {
         auto s = sim.force_sensitivities(parameters_);
-        if (!s) throw std::logic_error("forward sensitivities unavailable where they were planned");
-        sensitivity_at[waypoint] = std::move(*s);
+        available = s.has_value();
+        if (available) sensitivity_at[waypoint] = std::move(*s);
       }
     });
     for (std::size_t i = 0; i < points; ++i) values[i] = force_at[point_of_waypoint_[i]];
-    if (jacobian) {
+    if (jacobian) jacobian->clear();
+    if (jacobian && available) {
       jacobian->assign(points, std::vector<double>(parameters_.size(), 0.0));
       for (std::size_t i = 0; i < points; ++i)
         if (point_of_waypoint_[i] > 0) (*jacobian)[i] = sensitivity_at[point_of_waypoint_[i]];
     }
     return values;
   }
-  // The imprint.  With derivatives: the sensitivities at every reversal of the path record the
+  // The imprint.  With derivatives: the sensitivities before every descent of the path record the
   // peak's d eps*/d theta for Ilyushin's unloading branch (Simulation::sensitivities), those at
-  // the end give d v/d theta.
+  // the end give d v/d theta.  Should they be unavailable after all, the jacobian is left empty
+  // and evaluate() differentiates this evaluation by finite differences.
   const std::vector<double> targets = plan_increments(lc.load);
-  std::vector<char> reversal(targets.size(), 0);
+  std::vector<char> descent(targets.size(), 0);
   if (jacobian)
-    for (int step : reversal_steps(targets)) reversal[static_cast<std::size_t>(step)] = 1;
+    for (int step : descent_starts(targets)) descent[static_cast<std::size_t>(step)] = 1;
+  bool available = jacobian != nullptr;
   sim.run([&](const IncrementRecord& r) {
     const auto step = static_cast<std::size_t>(r.step);
-    if (jacobian && step < reversal.size() && reversal[step] && !sim.sensitivities(parameters_))
-      throw std::logic_error("forward sensitivities unavailable where they were planned");
+    if (available && step < descent.size() && descent[step]) available = sim.sensitivities(parameters_).has_value();
   });
   std::optional<Simulation::Sensitivities> end;
+  if (available) end = sim.sensitivities(parameters_, true);
   if (jacobian) {
-    end = sim.sensitivities(parameters_);
-    if (!end) throw std::logic_error("forward sensitivities unavailable where they were planned");
-    jacobian->assign(points, std::vector<double>(parameters_.size(), 0.0));
+    jacobian->clear();
+    if (end) jacobian->assign(points, std::vector<double>(parameters_.size(), 0.0));
   }
   // The surface nodes' depth below the original surface, -v, between the nodes linear.
   std::vector<double> r, depth;
@@ -207,7 +210,7 @@ std::vector<double> ForwardModel::run_once(const LoadCase& base, int refinement,
                        fmt::format("radius {} m is beyond the punch's reach ({} m) on this mesh", data_.abscissa[i],
                                    r.empty() ? 0.0 : r.back()));
     values[i] = (*at)(depth);
-    if (jacobian)
+    if (end)
       for (std::size_t j = 0; j < parameters_.size(); ++j) {
         std::vector<double> d_depth(equation.size());
         for (std::size_t k = 0; k < equation.size(); ++k) d_depth[k] = -end->displacement[j][equation[k]];
@@ -236,10 +239,11 @@ ModelEvaluation ForwardModel::evaluate(const std::vector<double>& theta, bool wi
   const LoadCase lc = case_at(theta);
   if (sensitivities_) {
     e.values = run(lc, with_jacobian ? &e.jacobian : nullptr, e.forward_runs);
-    return e;
+    if (!with_jacobian || !e.jacobian.empty()) return e;
+  } else {
+    e.values = run(lc, nullptr, e.forward_runs);
+    if (!with_jacobian) return e;
   }
-  e.values = run(lc, nullptr, e.forward_runs);
-  if (!with_jacobian) return e;
   e.jacobian.assign(e.values.size(), std::vector<double>(parameters_.size(), 0.0));
   for (std::size_t j = 0; j < parameters_.size(); ++j) {
     const double scale = theta[j] != 0.0 ? std::abs(theta[j]) : bounds_[j].second - bounds_[j].first;

@@ -79,6 +79,7 @@ void IlyushinPointLaw::restore(const std::vector<double>& h) {
   if (h.size() != 1 + 5 * peak_intensity_.size())
     throw std::invalid_argument("Ilyushin history of the wrong size for this mesh");
   loading_ = h[0] != 0.0;
+  peak_strain_derivative_.clear();  // recorded for another peak (checkpoints do not carry them)
   for (std::size_t p = 0; p < peak_intensity_.size(); ++p) {
     peak_strain_[p] = VoigtVector(h[1 + 5 * p], h[2 + 5 * p], h[3 + 5 * p], h[4 + 5 * p]);
     peak_intensity_[p] = h[5 + 5 * p];

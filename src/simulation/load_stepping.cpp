@@ -60,6 +60,13 @@ std::vector<int> reversal_steps(const std::vector<double>& targets) {
   return steps;
 }
 
+std::vector<int> descent_starts(const std::vector<double>& targets) {
+  std::vector<int> steps;
+  for (std::size_t k = 0; k + 1 < targets.size(); ++k)
+    if (targets[k + 1] < targets[k]) steps.push_back(static_cast<int>(k));
+  return steps;
+}
+
 void extrapolate(const std::vector<double>& u_previous, double alpha_previous, const std::vector<double>& u_current,
                  double alpha_current, double alpha_next, std::vector<double>& guess) {
   guess = u_current;

@@ -482,7 +482,8 @@ std::optional<std::vector<double>> Simulation::force_sensitivities(const std::ve
   return std::move(s->force);
 }
 
-std::optional<Simulation::Sensitivities> Simulation::sensitivities(const std::vector<MaterialParameter>& parameters) {
+std::optional<Simulation::Sensitivities> Simulation::sensitivities(const std::vector<MaterialParameter>& parameters,
+                                                                   bool with_displacement) {
   const MaterialInput& m = load_case_.material;
   for (MaterialParameter p : parameters)
     if (p == MaterialParameter::nu) return std::nullopt;  // nu also shapes the condensed far field
@@ -555,20 +556,21 @@ std::optional<Simulation::Sensitivities> Simulation::sensitivities(const std::ve
   // The whole mesh's du/d(theta): the condensed far field is linear elastic, K_FF u_F = -K_FR u_R,
   // so expanding is linear and applies to du as it does to u (for E, du = 0 anyway).
   std::vector<std::vector<double>> du_mesh(base.size());
-  for (std::size_t b = 0; b < base.size(); ++b)
-    if (std::any_of(combination.begin(), combination.end(), [b](const auto& c) { return c[b] != 0.0; }))
-      from_system(du[b], du_mesh[b]);
+  if (with_displacement)
+    for (std::size_t b = 0; b < base.size(); ++b)
+      if (std::any_of(combination.begin(), combination.end(), [b](const auto& c) { return c[b] != 0.0; }))
+        from_system(du[b], du_mesh[b]);
   Sensitivities result;
   for (const auto& c : combination) {
     double dP = 0.0;
-    std::vector<double> d_u(u_.size(), 0.0);
+    std::vector<double> d_u(with_displacement ? u_.size() : 0, 0.0);
     for (std::size_t b = 0; b < base.size(); ++b) {
       if (c[b] == 0.0) continue;
       dP += c[b] * base_derivative[b];
       for (std::size_t i = 0; i < d_u.size(); ++i) d_u[i] += c[b] * du_mesh[b][i];
     }
     result.force.push_back(dP);
-    result.displacement.push_back(std::move(d_u));
+    if (with_displacement) result.displacement.push_back(std::move(d_u));
   }
   return result;
 }
