@@ -88,7 +88,10 @@ def main(folder):
         ax.set_ylabel(keys[0])
         ax.set_title("value +- 2 standard errors")
     verdict = "identifiable" if fit["identifiable"] else "NOT identifiable"
-    fig.suptitle(f"indentsim fit: {fit['forward_runs']} forward runs, {fit['wall_s']:.1f} s; condition number "
+    runs = f"{fit['forward_runs']} forward runs"
+    if fit.get("coarse_runs", 0):
+        runs += f" (+{fit['coarse_runs']} coarse)"
+    fig.suptitle(f"indentsim fit: {runs}, {fit['wall_s']:.1f} s; condition number "
                  f"{fit['condition_number']:.3g} ({verdict})")
     fig.tight_layout()
     for ext in ("png", "svg"):

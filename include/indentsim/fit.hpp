@@ -103,7 +103,8 @@ struct FitResult {
   int coarse_runs = 0;   ///< runs on the coarse phase's meshes (contact_nodes / 2)
   int iterations = 0;    ///< Levenberg-Marquardt iterations over every start and phase
   double wall_seconds = 0.0;
-  std::vector<StartOutcome> starts;
+  std::vector<StartOutcome> starts;  ///< in the order run: coarse starts, then fine starts or the polish
+  std::size_t selected_start = 0;    ///< the outcome the values come from
   bool mesh_replanned = false;  ///< the meshes were planned at a (coarse) result, not at the start
 };
 

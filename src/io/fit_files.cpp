@@ -354,10 +354,13 @@ nlohmann::json fit_json(const FitProblem& problem, const FitResult& r) {
   j["wall_s"] = r.wall_seconds;
   j["mesh_replanned"] = r.mesh_replanned;
   json starts = json::array();
-  for (const auto& s : r.starts)
+  // Costs are comparable within a phase's meshes only: a coarse start's is on other meshes.
+  for (std::size_t k = 0; k < r.starts.size(); ++k) {
+    const StartOutcome& s = r.starts[k];
     starts.push_back({{"start", s.start}, {"result", s.result}, {"cost", number(s.cost)}, {"iterations", s.iterations},
-                      {"converged", s.converged}, {"message", s.message},
-                      {"phase", s.phase}});
+                      {"converged", s.converged}, {"message", s.message}, {"phase", s.phase},
+                      {"selected", k == r.selected_start}});
+  }
   j["starts"] = starts;
   return j;
 }
