@@ -236,8 +236,12 @@ TEST(AxisymmetricLayers, TheForceAcrossEveryLineIsP) {
     ASSERT_GT(force, 0.0);
     const auto layers = layer_forces(sim.mesh(), sim.bulk());
     for (std::size_t j = 0; j < layers.size(); ++j) {
-      if (!std::isnan(layers[j].below)) EXPECT_NEAR(layers[j].below, force, 1e-8 * force) << "line " << j;
-      if (!std::isnan(layers[j].above)) EXPECT_NEAR(layers[j].above, force, 1e-8 * force) << "line " << j;
+      if (!std::isnan(layers[j].below)) {
+        EXPECT_NEAR(layers[j].below, force, 1e-8 * force) << "line " << j;
+      }
+      if (!std::isnan(layers[j].above)) {
+        EXPECT_NEAR(layers[j].above, force, 1e-8 * force) << "line " << j;
+      }
     }
   }
 }
