@@ -176,6 +176,30 @@ void check_problem(const FitProblem& problem) {
                                  problem.free.size()));
 }
 
+/// The index of the lowest finite cost among the outcomes on the coarse meshes ("coarse") or on
+/// the data sets' own ("fine": fine starts and polishes), or outcomes.size() if there is none.
+std::size_t best_start(const std::vector<StartOutcome>& outcomes, const std::string& meshes) {
+  std::size_t chosen = outcomes.size();
+  for (std::size_t k = 0; k < outcomes.size(); ++k) {
+    const StartOutcome& o = outcomes[k];
+    if ((o.phase == "coarse") != (meshes == "coarse") || !std::isfinite(o.cost)) continue;
+    if (chosen == outcomes.size() || o.cost < outcomes[chosen].cost) chosen = k;
+  }
+  return chosen;
+}
+
+/// The free parameters' keys and bounds, as the forward models take them.
+std::pair<std::vector<MaterialParameter>, std::vector<std::pair<double, double>>> split(
+    const std::vector<FreeParameter>& free) {
+  std::vector<MaterialParameter> parameters;
+  std::vector<std::pair<double, double>> bounds;
+  for (const FreeParameter& f : free) {
+    parameters.push_back(f.parameter);
+    bounds.emplace_back(f.lower, f.upper);
+  }
+  return {parameters, bounds};
+}
+
 std::string percent(double fraction) { return fmt::format("{:.3g}%", 100.0 * fraction); }
 
 }  // namespace
@@ -188,14 +212,9 @@ FitData synthetic_data(const LoadCase& truth, FitDataKind kind, const std::vecto
   d.load_case = truth;
   d.abscissa = abscissa;
   d.values.assign(abscissa.size(), 0.0);
-  std::vector<MaterialParameter> parameters;
-  std::vector<std::pair<double, double>> bounds;
+  const auto [parameters, bounds] = split(free);
   std::vector<double> theta;
-  for (const FreeParameter& f : free) {
-    parameters.push_back(f.parameter);
-    bounds.emplace_back(f.lower, f.upper);
-    theta.push_back(value_of(truth.material, f.parameter));
-  }
+  for (MaterialParameter p : parameters) theta.push_back(value_of(truth.material, p));
   const ForwardModel model(d, parameters, bounds, false);
   d.values = model.evaluate(theta, false).values;
   double largest = 0.0;
@@ -210,12 +229,7 @@ FitResult fit(const FitProblem& problem) {
   const auto start_time = std::chrono::steady_clock::now();
   check_problem(problem);
   const std::size_t p = problem.free.size();
-  std::vector<MaterialParameter> parameters;
-  std::vector<std::pair<double, double>> bounds;
-  for (const auto& f : problem.free) {
-    parameters.push_back(f.parameter);
-    bounds.emplace_back(f.lower, f.upper);
-  }
+  const auto [parameters, bounds] = split(problem.free);
   // The parameters Ceres sees, x = theta / scale, are of order one.
   const MaterialInput& first = problem.data.front().load_case.material;
   std::vector<double> scale, case_start;
@@ -293,11 +307,6 @@ FitResult fit(const FitProblem& problem) {
     result.iterations += std::max(0, outcome.iterations);
     return outcome;
   };
-  const auto best_of = [](const std::vector<StartOutcome>& outcomes) {
-    return std::min_element(outcomes.begin(), outcomes.end(), [](const auto& a, const auto& b) {
-      return std::isfinite(a.cost) && (!std::isfinite(b.cost) || a.cost < b.cost);
-    });
-  };
 
   // Coarse first: the starts run on meshes with half the contact nodes (a quarter of the unknowns,
   // about a sixth of the time), where Levenberg-Marquardt does its travelling; the fine meshes are
@@ -321,9 +330,9 @@ FitResult fit(const FitProblem& problem) {
   if (coarse_first) {
     const Level coarse = make_level(2, {}, coarse_runs);
     run_starts(coarse, "coarse");
-    const auto best = best_of(result.starts);
-    if (std::isfinite(best->cost)) {
-      const std::vector<double> coarse_optimum = best->result;
+    const std::size_t best = best_start(result.starts, "coarse");
+    if (best < result.starts.size()) {
+      const std::vector<double> coarse_optimum = result.starts[best].result;
       fine = make_level(1, coarse_optimum, forward_runs);
       result.starts.push_back(solve_from(*fine, "polish", coarse_optimum, 0, starts, problem.settings.max_iterations));
       if (std::isfinite(result.starts.back().cost)) result.mesh_replanned = true;
@@ -337,16 +346,7 @@ FitResult fit(const FitProblem& problem) {
     replan = problem.settings.replan_mesh;
   }
   // The best outcome on the fine meshes (coarse costs are on other meshes: not comparable).
-  const auto selected = [&] {
-    std::size_t chosen = result.starts.size();
-    for (std::size_t k = 0; k < result.starts.size(); ++k) {
-      const StartOutcome& o = result.starts[k];
-      if (o.phase == "coarse" || !std::isfinite(o.cost)) continue;
-      if (chosen == result.starts.size() || o.cost < result.starts[chosen].cost) chosen = k;
-    }
-    return chosen;
-  };
-  result.selected_start = selected();
+  result.selected_start = best_start(result.starts, "fine");
   if (result.selected_start == result.starts.size())
     throw SolverError("no start of the fit reached a successful forward run");
   std::vector<double> theta = result.starts[result.selected_start].result;
