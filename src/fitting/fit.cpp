@@ -229,7 +229,10 @@ FitResult fit(const FitProblem& problem) {
   const auto start_time = std::chrono::steady_clock::now();
   check_problem(problem);
   const std::size_t p = problem.free.size();
-  const auto [parameters, bounds] = split(problem.free);
+  // Named variables, not a structured binding: clang 14 cannot capture bindings in lambdas.
+  const auto free_split = split(problem.free);
+  const std::vector<MaterialParameter>& parameters = free_split.first;
+  const auto& bounds = free_split.second;
   // The parameters Ceres sees, x = theta / scale, are of order one.
   const MaterialInput& first = problem.data.front().load_case.material;
   std::vector<double> scale, case_start;
