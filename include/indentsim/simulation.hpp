@@ -63,6 +63,9 @@ public:
   /// condensed near field to solve for (a resumed run continues on the near field it had).
   explicit Simulation(LoadCase load_case, std::optional<double> planned_contact_half_width = std::nullopt,
                       std::optional<NearField> near_field = std::nullopt);
+  /// A run on a given plan, no pilot: the error estimate's companion runs (error_estimate.hpp)
+  /// use the main run's planned contact width with fewer contact nodes.
+  Simulation(LoadCase load_case, const RunPlan& plan);
   ~Simulation();
 
   const LoadCase& load_case() const { return load_case_; }
@@ -144,6 +147,8 @@ public:
   const PhaseTimes& times() const { return times_; }
 
 private:
+  /// Builds mesh, laws, contact and the Newton system on `plan`.
+  void build(const RunPlan& plan, const std::optional<NearField>& near_field);
   struct SolveCounters {
     long iterations = 0, factorizations = 0;
   };

@@ -176,6 +176,19 @@ RunPlan plan_run(const LoadCase& load_case, std::optional<double> planned_contac
 Simulation::Simulation(LoadCase load_case, std::optional<double> planned_contact_half_width,
                        std::optional<NearField> near_field)
     : load_case_(std::move(load_case)) {
+  RunPlan run_plan;
+  {
+    const PhaseTimes::Scope timing = times_.measure("planning");
+    run_plan = plan_run(load_case_, planned_contact_half_width);
+  }
+  build(run_plan, near_field);
+}
+
+Simulation::Simulation(LoadCase load_case, const RunPlan& plan) : load_case_(std::move(load_case)) {
+  build(plan, std::nullopt);
+}
+
+void Simulation::build(const RunPlan& run_plan, const std::optional<NearField>& near_field) {
   const auto& m = load_case_.material;
   const ElasticMaterial material{m.E, m.nu};
   std::optional<IlyushinLaw> law;
@@ -184,11 +197,6 @@ Simulation::Simulation(LoadCase load_case, std::optional<double> planned_contact
     if (auto violation = law->admissibility_violation())
       throw InputError(load_case_.source, m.hardening == HardeningLaw::linear ? "material.kappa" : "material.n",
                        *violation);
-  }
-  RunPlan run_plan;
-  {
-    const PhaseTimes::Scope timing = times_.measure("planning");
-    run_plan = plan_run(load_case_, planned_contact_half_width);
   }
   plan_ = run_plan.mesh;
   const std::optional<PlasticExtent>& pilot_plastic_zone = run_plan.plastic_zone;
