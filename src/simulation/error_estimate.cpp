@@ -1,0 +1,180 @@
+#include "indentsim/error_estimate.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "indentsim/error.hpp"
+#include "indentsim/mesh.hpp"
+#include "indentsim/simulation.hpp"
+#include "indentsim/solver.hpp"
+
+namespace indentsim {
+
+RichardsonEstimate richardson(double fine, double coarse, double ratio, double order) {
+  if (!(ratio > 1.0) || !(order > 0.0)) throw std::invalid_argument("richardson: needs ratio > 1 and order > 0");
+  const double extrapolated = fine + (fine - coarse) / (std::pow(ratio, order) - 1.0);
+  return {extrapolated, std::abs(fine - extrapolated)};
+}
+
+std::optional<double> observed_order(double f1, double f2, double f3, double h1, double h2, double h3) {
+  constexpr double lowest = 0.5, highest = 6.0;
+  if (!(h1 < h2 && h2 < h3)) throw std::invalid_argument("observed_order: needs h1 < h2 < h3");
+  const double d12 = f2 - f1, d23 = f3 - f2;
+  // In the asymptotic range f moves monotonically with h: both differences have one sign.
+  if (d12 == 0.0 || d23 == 0.0 || (d12 > 0.0) != (d23 > 0.0)) return std::nullopt;
+  // (h3^p - h2^p) / (h2^p - h1^p) = d23 / d12 grows monotonically with p: bisection.
+  const double target = d23 / d12;
+  const auto ratio_at = [&](double p) {
+    return (std::pow(h3, p) - std::pow(h2, p)) / (std::pow(h2, p) - std::pow(h1, p));
+  };
+  double lo = lowest, hi = highest;
+  if (target < ratio_at(lo) || target > ratio_at(hi)) return std::nullopt;
+  for (int i = 0; i < 100 && hi - lo > 1e-12; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (ratio_at(mid) < target ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+namespace {
+
+/// The main run's case on its own plan but `contact_nodes` across the planned contact width.
+CompanionRun run_companion(const Simulation& main, int contact_nodes) {
+  const auto start = std::chrono::steady_clock::now();
+  CompanionRun companion;
+  companion.contact_nodes = contact_nodes;
+  LoadCase lc = main.load_case();
+  lc.mesh.contact_nodes = contact_nodes;
+  // The main run's planned contact width; not its pilot's plastic zone, which a resumed run no
+  // longer has: the companion's near field is sized from the width alone (and grows if need be),
+  // so that a resumed run's estimate is the original's bit for bit.
+  const RunPlan plan{plan_mesh(lc, main.plan().contact_half_width_estimate), std::nullopt};
+  try {
+    Simulation sim(lc, plan);
+    sim.run([&](const IncrementRecord& r) { companion.curve.push_back(r); });
+  } catch (const SolverError& e) {
+    companion.failure = e.what();
+  }
+  companion.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return companion;
+}
+
+}  // namespace
+
+std::optional<std::string> error_estimate_unavailable(const LoadCase& load_case) {
+  const MeshInput& mesh = load_case.mesh;
+  const int divisor = mesh.error_estimate == ErrorEstimateChoice::observed ? 4 : 2;
+  if (mesh.error_estimate == ErrorEstimateChoice::off || mesh.contact_nodes / divisor >= 2) return std::nullopt;
+  return fmt::format("mesh.contact_nodes = {} is too coarse for a companion run at contact_nodes / {} (it needs at "
+                     "least {}): this run has no error estimate",
+                     mesh.contact_nodes, divisor, 2 * divisor);
+}
+
+DiscretizationErrorEstimate::DiscretizationErrorEstimate(const Simulation& main)
+    : method_(main.load_case().mesh.error_estimate), contact_nodes_(main.load_case().mesh.contact_nodes) {
+  if (method_ == ErrorEstimateChoice::off) throw std::invalid_argument("error estimate: mesh.error_estimate is off");
+  if (const auto why = error_estimate_unavailable(main.load_case())) throw std::invalid_argument(*why);
+  std::vector<int> levels{contact_nodes_ / 2};
+  if (method_ == ErrorEstimateChoice::observed) levels.push_back(contact_nodes_ / 4);
+  for (int nodes : levels) {
+    companions_.push_back(run_companion(main, nodes));
+    const CompanionRun& c = companions_.back();
+    if (!c.failure.empty())
+      warnings_.push_back(fmt::format("the error estimate's companion run (contact_nodes = {}) stopped after "
+                                      "increment {}: {}; later increments have no error estimate",
+                                      nodes, c.curve.empty() ? -1 : c.curve.back().step, c.failure));
+  }
+}
+
+double DiscretizationErrorEstimate::wall_seconds() const {
+  double total = 0.0;
+  for (const CompanionRun& c : companions_) total += c.wall_seconds;
+  return total;
+}
+
+const IncrementRecord* DiscretizationErrorEstimate::companion_row(std::size_t companion,
+                                                                  const IncrementRecord& row) const {
+  const std::vector<IncrementRecord>& curve = companions_[companion].curve;
+  if (row.step < 0 || static_cast<std::size_t>(row.step) >= curve.size()) return nullptr;
+  const IncrementRecord& c = curve[static_cast<std::size_t>(row.step)];
+  // Same load path, same planned depths: the rows match step for step.
+  if (c.step != row.step || std::abs(c.alpha - row.alpha) > 1e-12 * std::max(std::abs(row.alpha), 1e-300))
+    return nullptr;
+  return &c;
+}
+
+std::optional<DiscretizationErrorEstimate::AtIncrement> DiscretizationErrorEstimate::at(
+    const IncrementRecord& row) const {
+  const IncrementRecord* half = companion_row(0, row);
+  if (!half) return std::nullopt;
+  // The fine-zone spacing is the planned contact width over contact_nodes: h ~ 1 / contact_nodes.
+  const double ratio = static_cast<double>(contact_nodes_) / companions_[0].contact_nodes;
+  AtIncrement estimate;
+  estimate.force_order = nominal_force_order;
+  if (method_ == ErrorEstimateChoice::observed) {
+    const IncrementRecord* quarter = companion_row(1, row);
+    if (!quarter) return std::nullopt;
+    const double h1 = 1.0 / contact_nodes_, h2 = 1.0 / companions_[0].contact_nodes,
+                 h3 = 1.0 / companions_[1].contact_nodes;
+    if (const auto p = observed_order(row.force, half->force, quarter->force, h1, h2, h3)) {
+      estimate.force_order = *p;
+      estimate.order_observed = true;
+    }
+  }
+  const RichardsonEstimate force = richardson(row.force, half->force, ratio, estimate.force_order);
+  estimate.force_error = force.error;
+  estimate.force_extrapolated = force.extrapolated;
+  estimate.width_error = richardson(row.half_width, half->half_width, ratio, nominal_width_order).error;
+  return estimate;
+}
+
+std::optional<double> relative_force_error(const DiscretizationErrorEstimate& estimate,
+                                           const std::vector<IncrementRecord>& curve) {
+  if (curve.empty()) return std::nullopt;
+  const IncrementRecord* row = &curve.back();
+  if (row->force == 0.0)
+    for (const IncrementRecord& r : curve)
+      if (std::abs(r.force) > std::abs(row->force)) row = &r;
+  if (row->force == 0.0) return std::nullopt;
+  const auto e = estimate.at(*row);
+  if (!e) return std::nullopt;
+  return e->force_error / std::abs(row->force);
+}
+
+int plan_contact_nodes_for_target(const LoadCase& load_case, TargetErrorChoice& choice, int pilot_contact_nodes) {
+  if (!load_case.mesh.target_error) throw std::invalid_argument("plan_contact_nodes_for_target: no target");
+  choice.target = *load_case.mesh.target_error;
+  LoadCase pilot_case = load_case;
+  pilot_case.mesh.contact_nodes = pilot_contact_nodes;
+  pilot_case.mesh.target_error.reset();
+  Simulation pilot(pilot_case);
+  const DiscretizationErrorEstimate estimate(pilot);
+  std::vector<IncrementRecord> curve;
+  try {
+    pilot.run([&](const IncrementRecord& r) { curve.push_back(r); });
+  } catch (const SolverError& e) {
+    throw SolverError(fmt::format("the pilot of mesh.target_error (contact_nodes = {}) did not converge: {}",
+                                  pilot_contact_nodes, e.what()));
+  }
+  const std::optional<double> error = relative_force_error(estimate, curve);
+  if (!error)
+    throw SolverError(fmt::format("the pilot of mesh.target_error (contact_nodes = {}) has no error estimate: its "
+                                  "companion run stopped early or the curve has no force",
+                                  pilot_contact_nodes));
+  choice.attempts.push_back({"pilot", pilot_contact_nodes, *error});
+  return contact_nodes_for_target(*error, pilot_contact_nodes, choice.target);
+}
+
+int contact_nodes_for_target(double relative_error, int contact_nodes, double target, double order) {
+  if (!(target > 0.0) || !(order > 0.0)) throw std::invalid_argument("contact_nodes_for_target: bad target or order");
+  if (!(relative_error > target)) return contact_nodes;
+  // error ~ C h^p and h ~ 1 / contact_nodes: N = N0 (e0 / target)^(1/p), 15% finer for margin.
+  const double nodes = 1.15 * contact_nodes * std::pow(relative_error / target, 1.0 / order);
+  return static_cast<int>(std::min(std::ceil(nodes), 1e6));
+}
+
+}  // namespace indentsim
