@@ -2,11 +2,13 @@
 // output at all when the input is bad.
 #include <sys/wait.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include "test_support.hpp"
@@ -98,4 +100,94 @@ TEST_F(Cli, BrokenOrMissingFilesExitWithStatus2) {
   o = run("frobnicate");
   EXPECT_EQ(o.status, 2);
   EXPECT_FALSE(fs::exists(dir_ / "x"));
+}
+
+// mesh.error_estimate: on by default, its columns in curve.csv (before wall_s) and its figures in
+// summary.json; "off" leaves both out; a mesh too coarse for a companion runs without one and says so.
+TEST_F(Cli, ErrorEstimateColumnsAndSummary) {
+  const fs::path c = write_case("case.toml", good_case);
+  const auto header_of = [](const fs::path& curve) {
+    std::ifstream in(curve);
+    std::string header;
+    std::getline(in, header);
+    return header;
+  };
+  const Outcome on = run("run " + c.string() + " --quiet --out " + (dir_ / "on").string());
+  ASSERT_EQ(on.status, 0) << on.err;
+  EXPECT_EQ(header_of(dir_ / "on" / "curve.csv"),
+            "step,alpha,P,a,contact_nodes,newton_iters,factorizations,cutbacks,plastic_points,max_strain_intensity,"
+            "P_error_estimate,a_error_estimate,P_extrapolated,wall_s");
+  const auto rows = indentsim::testing::read_curve(dir_ / "on" / "curve.csv");
+  ASSERT_EQ(rows.size(), 4u);
+  for (const auto& row : rows) {
+    ASSERT_EQ(row.size(), 14u);
+    EXPECT_TRUE(std::isfinite(row[10]) && std::isfinite(row[11]) && std::isfinite(row[12]));
+    EXPECT_GE(row[10], 0.0);
+    EXPECT_NEAR(std::abs(row[12] - row[2]), row[10], 1e-9 * std::abs(row[2]) + 1e-12);  // |P - P*| is the estimate
+  }
+  EXPECT_GT(rows.back()[10], 0.0);
+  const std::string summary = slurp(dir_ / "on" / "summary.json");
+  EXPECT_NE(summary.find("\"error_estimate\": {\"method\": \"richardson\", \"contact_nodes\": 8, "
+                         "\"companion_contact_nodes\": [4]"),
+            std::string::npos)
+      << summary;
+  EXPECT_NE(summary.find("\"error estimate\": "), std::string::npos);  // its time, among the run's phases
+  EXPECT_NE(summary.find("\"cost_fraction\": 0."), std::string::npos);
+
+  const Outcome off = run("run " + c.string() + " --quiet --out " + (dir_ / "off").string() +
+                          " --set mesh.error_estimate=\\\"off\\\"");
+  ASSERT_EQ(off.status, 0) << off.err;
+  EXPECT_EQ(header_of(dir_ / "off" / "curve.csv").find("error_estimate"), std::string::npos);
+  EXPECT_EQ(slurp(dir_ / "off" / "summary.json").find("error_estimate"), std::string::npos);
+  // The curve itself does not depend on the estimate.
+  const auto off_rows = indentsim::testing::read_curve(dir_ / "off" / "curve.csv");
+  ASSERT_EQ(off_rows.size(), rows.size());
+  for (std::size_t k = 0; k < rows.size(); ++k) EXPECT_EQ(off_rows[k][2], rows[k][2]);
+
+  const Outcome coarse = run("run " + c.string() + " --quiet --out " + (dir_ / "coarse").string() +
+                             " --set mesh.contact_nodes=3");
+  ASSERT_EQ(coarse.status, 0) << coarse.err;
+  EXPECT_NE(coarse.err.find("too coarse for a companion"), std::string::npos) << coarse.err;
+  EXPECT_EQ(header_of(dir_ / "coarse" / "curve.csv").find("error_estimate"), std::string::npos);
+}
+
+TEST_F(Cli, BadErrorEstimateKeysExitWithStatus2) {
+  const fs::path c = write_case("case.toml", good_case);
+  const fs::path out = dir_ / "must_not_exist";
+  const struct {
+    std::string set, key, problem;
+  } cases[] = {
+      {"mesh.error_estimate=\\\"bogus\\\"", "mesh.error_estimate", "is not one of: richardson, observed, off"},
+      {"mesh.target_error=0.5", "mesh.target_error", "[1e-5, 0.1]"},
+      {"mesh.target_error=0", "mesh.target_error", "[1e-5, 0.1]"},
+      {"mesh.target_error=1e-3 --set mesh.error_estimate=\\\"off\\\"", "mesh.target_error", "needs an error estimate"},
+  };
+  for (const auto& bad : cases) {
+    SCOPED_TRACE(bad.set);
+    const Outcome o = run("run " + c.string() + " --out " + out.string() + " --set " + bad.set);
+    EXPECT_EQ(o.status, 2);
+    EXPECT_NE(o.err.find(bad.key), std::string::npos) << o.err;
+    EXPECT_NE(o.err.find(bad.problem), std::string::npos) << o.err;
+    EXPECT_FALSE(fs::exists(out));
+  }
+}
+
+// mesh.target_error through the command line: the pilot, the chosen mesh in case.toml (so that a
+// resume continues on it), and the estimate against the target in summary.json.
+TEST_F(Cli, TargetErrorChoosesTheMeshAndReportsIt) {
+  const fs::path c = write_case("case.toml", good_case);
+  const fs::path out = dir_ / "target";
+  const Outcome o = run("run " + c.string() + " --out " + out.string() + " --set mesh.target_error=2e-3");
+  ASSERT_EQ(o.status, 0) << o.err;
+  EXPECT_NE(o.out.find("target error 0.002: the pilot (contact_nodes = 10)"), std::string::npos) << o.out;
+  const std::string summary = slurp(out / "summary.json");
+  EXPECT_NE(summary.find("\"target_error\": {\"target\": 0.002, \"before\": [{\"role\": \"pilot\", \"contact_nodes\": 10"),
+            std::string::npos)
+      << summary;
+  EXPECT_NE(summary.find("\"met\": true"), std::string::npos) << summary;
+  const indentsim::LoadCase as_run = indentsim::read_load_case(out / "case.toml");
+  EXPECT_FALSE(as_run.mesh.target_error);
+  EXPECT_GE(as_run.mesh.contact_nodes, 10);
+  EXPECT_NE(summary.find(fmt::format("\"contact_nodes\": {}, \"P_relative_error_estimate\"", as_run.mesh.contact_nodes)),
+            std::string::npos);
 }

@@ -3,6 +3,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdlib>
 
 #include <filesystem>
@@ -98,7 +99,8 @@ inline std::vector<std::vector<double>> read_curve(const std::filesystem::path& 
   while (std::getline(in, line)) {
     std::vector<double> row;
     std::istringstream cells(line);
-    for (std::string cell; std::getline(cells, cell, ',');) row.push_back(std::stod(cell));
+    for (std::string cell; std::getline(cells, cell, ',');)
+      row.push_back(cell.empty() ? std::nan("") : std::stod(cell));  // empty: no error estimate there
     rows.push_back(row);
   }
   return rows;

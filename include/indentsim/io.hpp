@@ -7,6 +7,7 @@
 #include <memory>
 #include <optional>
 
+#include "indentsim/error_estimate.hpp"
 #include "indentsim/fields.hpp"
 #include "indentsim/indentation_analysis.hpp"
 #include "indentsim/file_system.hpp"
@@ -17,16 +18,20 @@ namespace indentsim {
 
 /// DIR/curve.csv: the P-alpha curve, one row per converged increment, written and flushed as
 /// the run goes so that a stopped run keeps every converged increment.
+/// With an error estimate (mesh.error_estimate, error_estimate.hpp) three more columns before
+/// wall_s: P_error_estimate, a_error_estimate and P_extrapolated (empty where a companion run
+/// has no such increment).
 class CurveWriter {
 public:
-  explicit CurveWriter(const std::filesystem::path& file);
+  CurveWriter(const std::filesystem::path& file, const DiscretizationErrorEstimate* error_estimate = nullptr);
 
   void write(const IncrementRecord& record);
-  static std::string header();
-  static std::string format(const IncrementRecord& record);
+  static std::string header(bool with_error_estimate = false);
+  static std::string format(const IncrementRecord& record, const DiscretizationErrorEstimate* error_estimate = nullptr);
 
 private:
   AppendedFile file_;
+  const DiscretizationErrorEstimate* error_estimate_;
 };
 
 /// How a run ended, as summary.json says in "status": "running" from its first write until it
@@ -62,8 +67,10 @@ public:
   /// The live state's exact unloading stiffness and contact radius at a peak `step`.
   void set_true_contact(int step, const TrueContact& truth);
   /// `run_fields`: JSON members (each line ending with a comma) about the run itself.
+  /// `result_fields`: JSON members about the results (each line ending with a comma), after the
+  /// unloading branches.
   std::string json(const std::string& run_fields, RunStatus status, const std::string& message,
-                   const PhaseTimes& times = PhaseTimes{}) const;
+                   const PhaseTimes& times = PhaseTimes{}, const std::string& result_fields = "") const;
   const std::vector<Unloading>& unloadings() const { return unloadings_; }
   double peak_depth() const { return peak_depth_; }
   double peak_force() const { return peak_force_; }
@@ -87,13 +94,18 @@ private:
 ///   layers.csv, profiles.csv        the paper's layer view of the deepest state (the peak of the
 ///                  load path) and of the final state, one block each (columns step, alpha);
 ///   summary.json   the run's status; peak, unloading stiffness and residual depth of each
-///                  unloading branch.
+///                  unloading branch; the error estimate at the final and the peak increment,
+///                  and how a target error chose the mesh.
 /// The folder is expected to be held (RunFolder) and cleared of an earlier run's files.
 class RunOutput {
 public:
+  /// `error_estimate` (may be null; must outlive this object) adds its columns and figures;
   /// `replay_curve`/`replay_depths`: the rows of a run being resumed, written again first.
   RunOutput(const std::filesystem::path& dir, const LoadCase& load_case,
+            const DiscretizationErrorEstimate* error_estimate = nullptr,
             const std::vector<IncrementRecord>& replay_curve = {}, const std::vector<double>& replay_depths = {});
+  /// How mesh.target_error chose this run's mesh (summary.json "target_error").
+  void set_target_choice(const TargetErrorChoice& choice) { target_choice_ = choice; }
   void increment(const Simulation& sim, const IncrementRecord& record);
   /// A resumed run's live state, restored at the last replayed increment: a peak's exact
   /// unloading stiffness is taken from it when the run resumes exactly there.
@@ -118,8 +130,13 @@ private:
   /// The layer view of the simulation's current state: {layers.csv rows, profiles.csv rows}.
   std::pair<std::string, std::string> layer_tables(const Simulation& sim, int step, bool header) const;
 
+  /// summary.json's "error_estimate" and "target_error" members (each line ending with a comma).
+  std::string error_fields(const PhaseTimes& times) const;
+
   std::filesystem::path dir_;
   std::string run_fields_;
+  const DiscretizationErrorEstimate* error_estimate_ = nullptr;
+  std::optional<TargetErrorChoice> target_choice_;
   LoadHistorySummary summary_;
   std::vector<IncrementRecord> records_;
   std::vector<double> depths_;

@@ -60,6 +60,11 @@ enum class ElementChoice { automatic, q1, bbar };
 /// The default mesh.contact_nodes under a cone (load_case.cpp says why).
 inline constexpr int cone_contact_nodes = 30;
 
+/// How a run estimates its own discretization error (error_estimate.hpp): a companion run on a
+/// mesh with half the contact nodes and the orders measured in the work-precision study
+/// ("richardson"), a second companion at a quarter to observe the order ("observed"), or none.
+enum class ErrorEstimateChoice { richardson, observed, off };
+
 struct MeshInput {
   ElementChoice element = ElementChoice::automatic;  ///< "auto" | "q1" | "bbar"
   int contact_nodes = 20;  ///< fine-zone elements across the estimated final contact half-width
@@ -68,6 +73,9 @@ struct MeshInput {
   std::optional<double> fine_width;          ///< override: width of the uniform zone [m]
   std::optional<double> fine_depth;          ///< override: depth of the uniform zone [m]
   std::optional<double> growth;              ///< override: geometric growth ratio of the far field
+  ErrorEstimateChoice error_estimate = ErrorEstimateChoice::richardson;
+  /// The relative error of the final P asked for: the run chooses contact_nodes (error_estimate.hpp).
+  std::optional<double> target_error;
 };
 
 struct OutputInput {

@@ -13,6 +13,7 @@
 #include <unistd.h>
 #include <filesystem>
 #include <iostream>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,7 @@
 #include "indentsim/checkpoint.hpp"
 #include "indentsim/curve_analysis.hpp"
 #include "indentsim/error.hpp"
+#include "indentsim/error_estimate.hpp"
 #include "indentsim/fit_files.hpp"
 #include "indentsim/file_system.hpp"
 #include "indentsim/interruption.hpp"
@@ -222,17 +224,62 @@ int drive(Simulation& sim, RunOutput& output, const std::string& label, bool qui
   }
 }
 
+/// mesh.error_estimate: the companion runs of `sim` (before anything is written), timed as the
+/// run's "error estimate" phase; null when it is off.
+std::unique_ptr<DiscretizationErrorEstimate> estimate_error(Simulation& sim, bool quiet) {
+  const LoadCase& lc = sim.load_case();
+  if (lc.mesh.error_estimate == ErrorEstimateChoice::off) return nullptr;
+  if (const auto why = error_estimate_unavailable(lc)) {
+    fmt::print(stderr, "warning: {}\n", *why);
+    return nullptr;
+  }
+  if (!quiet)
+    fmt::print("error estimate: companion run{} at contact_nodes = {}\n",
+               lc.mesh.error_estimate == ErrorEstimateChoice::observed ? "s" : "",
+               lc.mesh.error_estimate == ErrorEstimateChoice::observed
+                   ? fmt::format("{} and {}", lc.mesh.contact_nodes / 2, lc.mesh.contact_nodes / 4)
+                   : std::to_string(lc.mesh.contact_nodes / 2));
+  const PhaseTimes::Scope timing = sim.times().measure("error estimate");
+  auto estimate = std::make_unique<DiscretizationErrorEstimate>(sim);
+  for (const auto& warning : estimate->warnings()) fmt::print(stderr, "warning: {}\n", warning);
+  return estimate;
+}
+
 int command_run(const std::string& file, const std::vector<std::string>& overrides, const std::string& out,
                 bool quiet) {
   std::vector<std::string> all = overrides;
   if (!out.empty()) all.push_back("output.dir=" + toml_string(out));
   LoadCase lc = read_load_case(file, all);
   RunFolder folder(lc.output.dir, lc.source);  // one run per folder: locked before anything is solved
-  Simulation sim(lc);  // validates the mesh size before anything is written
-  if (!quiet) print_mesh(sim);
-  folder.clear_earlier_run();
-  RunOutput output(folder.dir(), lc);
-  return drive(sim, output, file, quiet);
+  // mesh.target_error: a pilot chooses contact_nodes; the run checks its own estimate and is
+  // refined once if it missed.  The case as run (case.toml, checkpoints) has the chosen mesh.
+  std::optional<TargetErrorChoice> target;
+  if (lc.mesh.target_error) {
+    target.emplace();
+    lc.mesh.contact_nodes = plan_contact_nodes_for_target(lc, *target);
+    lc.mesh.target_error.reset();
+    if (!quiet)
+      fmt::print("target error {:.3g}: the pilot (contact_nodes = {}) estimates {:.3g}; running contact_nodes = {}\n",
+                 target->target, target->attempts.back().contact_nodes, target->attempts.back().relative_error,
+                 lc.mesh.contact_nodes);
+  }
+  for (;;) {
+    Simulation sim(lc);  // validates the mesh size before anything is written
+    if (!quiet) print_mesh(sim);
+    const auto estimate = estimate_error(sim, quiet);
+    folder.clear_earlier_run();
+    RunOutput output(folder.dir(), lc, estimate.get());
+    if (target) output.set_target_choice(*target);
+    const int code = drive(sim, output, file, quiet);
+    if (!target || code != 0 || target->attempts.size() > 1) return code;
+    const std::optional<double> reached = relative_force_error(*estimate, output.records());
+    if (!reached || *reached <= target->target) return code;
+    target->attempts.push_back({"run", lc.mesh.contact_nodes, *reached});
+    lc.mesh.contact_nodes = contact_nodes_for_target(*reached, lc.mesh.contact_nodes, target->target);
+    if (!quiet)
+      fmt::print("target error {:.3g} missed (estimate {:.3g}): running once more at contact_nodes = {}\n",
+                 target->target, *reached, lc.mesh.contact_nodes);
+  }
 }
 
 int command_list_checkpoints(const std::string& argument) {
@@ -280,8 +327,10 @@ int command_resume(const std::string& argument, const std::vector<std::string>& 
   RunFolder folder(dir, file.string());
   const int step = checkpoint.curve.back().step;
   if (!quiet) fmt::print("resuming {} after increment {} (alpha = {:.6g} m)\n", file.string(), step, checkpoint.state.alpha);
+  // The companions are run again (they are cheap and not checkpointed), before anything is written.
+  const auto estimate = estimate_error(*run.simulation, quiet);
   folder.clear_earlier_run(in_place ? std::optional<int>(step) : std::nullopt);
-  RunOutput output(folder.dir(), run.load_case, checkpoint.curve, checkpoint.free_surface_depths);
+  RunOutput output(folder.dir(), run.load_case, estimate.get(), checkpoint.curve, checkpoint.free_surface_depths);
   output.resumed(*run.simulation);
   return drive(*run.simulation, output, file.string(), quiet);
 }

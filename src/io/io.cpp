@@ -1,5 +1,6 @@
 #include "indentsim/io.hpp"
 
+#include <cmath>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -59,21 +60,33 @@ std::string to_string(RunStatus status) {
   return "?";
 }
 
-CurveWriter::CurveWriter(const std::filesystem::path& file) : file_(file) { file_.append(header() + "\n"); }
-
-std::string CurveWriter::header() {
-  return "step,alpha,P,a,contact_nodes,newton_iters,factorizations,cutbacks,plastic_points,max_strain_intensity,"
-         "wall_s";
+CurveWriter::CurveWriter(const std::filesystem::path& file, const DiscretizationErrorEstimate* error_estimate)
+    : file_(file), error_estimate_(error_estimate) {
+  file_.append(header(error_estimate != nullptr) + "\n");
 }
 
-std::string CurveWriter::format(const IncrementRecord& r) {
+std::string CurveWriter::header(bool with_error_estimate) {
+  // The wall-clock time stays the last column: everything before it is the same in every run.
+  return std::string("step,alpha,P,a,contact_nodes,newton_iters,factorizations,cutbacks,plastic_points,"
+                     "max_strain_intensity") +
+         (with_error_estimate ? ",P_error_estimate,a_error_estimate,P_extrapolated" : "") + ",wall_s";
+}
+
+std::string CurveWriter::format(const IncrementRecord& r, const DiscretizationErrorEstimate* error_estimate) {
   // Full round-trip precision: the curve is data, not a report.
-  return fmt::format("{},{:.17g},{:.17g},{:.17g},{},{},{},{},{},{:.17g},{:.6f}", r.step, r.alpha, r.force,
-                     r.half_width, r.contact_nodes, r.newton_iterations, r.factorizations, r.cutbacks,
-                     r.plastic_points, r.max_strain_intensity, r.wall_seconds);
+  std::string line = fmt::format("{},{:.17g},{:.17g},{:.17g},{},{},{},{},{},{:.17g}", r.step, r.alpha, r.force,
+                                 r.half_width, r.contact_nodes, r.newton_iterations, r.factorizations, r.cutbacks,
+                                 r.plastic_points, r.max_strain_intensity);
+  if (error_estimate) {
+    if (const auto e = error_estimate->at(r))
+      line += fmt::format(",{:.6e},{:.6e},{:.17g}", e->force_error, e->width_error, e->force_extrapolated);
+    else
+      line += ",,,";  // the companion stopped before this increment
+  }
+  return line + fmt::format(",{:.6f}", r.wall_seconds);
 }
 
-void CurveWriter::write(const IncrementRecord& record) { file_.append(format(record) + "\n"); }
+void CurveWriter::write(const IncrementRecord& record) { file_.append(format(record, error_estimate_) + "\n"); }
 
 LoadHistorySummary::LoadHistorySummary(const LoadCase* load_case) {
   if (!load_case) return;
@@ -132,7 +145,7 @@ void LoadHistorySummary::add(const IncrementRecord& r, double free_surface_depth
 }
 
 std::string LoadHistorySummary::json(const std::string& run_fields, RunStatus status, const std::string& message,
-                                     const PhaseTimes& times) const {
+                                     const PhaseTimes& times, const std::string& result_fields) const {
   std::string out = fmt::format("{{\n  \"status\": \"{}\",\n", to_string(status));
   if (!message.empty()) out += fmt::format("  \"message\": {},\n", json_string(message));
   out += run_fields;
@@ -170,18 +183,21 @@ std::string LoadHistorySummary::json(const std::string& run_fields, RunStatus st
       out += "}";
     }
   }
-  out += unloadings_.empty() ? "]\n}\n" : "\n  ]\n}\n";
-  return out;
+  out += unloadings_.empty() ? "]" : "\n  ]";
+  if (!result_fields.empty()) out += ",\n" + result_fields.substr(0, result_fields.size() - 2);  // its last ",\n"
+  return out + "\n}\n";
 }
 
 RunOutput::RunOutput(const std::filesystem::path& dir, const LoadCase& load_case,
+                     const DiscretizationErrorEstimate* error_estimate,
                      const std::vector<IncrementRecord>& replay_curve, const std::vector<double>& replay_depths)
     : dir_(dir),
       run_fields_(run_fields(load_case)),
+      error_estimate_(error_estimate),
       summary_(&load_case),
       fields_every_(load_case.output.fields_every),
       profile_depths_(load_case.output.profile_depths),
-      curve_(dir / "curve.csv"),
+      curve_(dir / "curve.csv", error_estimate),
       fields_(dir),
       deepest_depth_(load_case.max_depth()) {
   const std::vector<double> targets = plan_increments(load_case.load);
@@ -257,7 +273,61 @@ void RunOutput::finish(const Simulation& sim, RunStatus status, const std::strin
     write_file_atomically(dir_ / "layers.csv", peak_apart ? peak_tables_.first + layers : layers);
     write_file_atomically(dir_ / "profiles.csv", peak_apart ? peak_tables_.second + profiles : profiles);
   }
-  write_file_atomically(dir_ / "summary.json", summary_.json(run_fields_, status, message, times));
+  write_file_atomically(dir_ / "summary.json", summary_.json(run_fields_, status, message, times, error_fields(times)));
+}
+
+std::string RunOutput::error_fields(const PhaseTimes& times) const {
+  std::string out;
+  std::optional<DiscretizationErrorEstimate::AtIncrement> final_estimate;
+  if (error_estimate_ && !records_.empty()) {
+    const DiscretizationErrorEstimate& e = *error_estimate_;
+    std::string companions;
+    for (const CompanionRun& c : e.companions())
+      companions += fmt::format("{}{}", companions.empty() ? "" : ", ", c.contact_nodes);
+    const auto at_row = [&](const IncrementRecord& r) {
+      const auto estimate = e.at(r);
+      if (!estimate) return std::string("null");
+      return fmt::format("{{\"step\": {}, \"alpha\": {:.17g}, \"P\": {:.17g}, \"P_error_estimate\": {:.6e}, "
+                         "\"P_relative_error_estimate\": {:.6e}, \"P_extrapolated\": {:.17g}, \"P_order\": {:.4g}, "
+                         "\"P_order_observed\": {}, \"a\": {:.17g}, \"a_error_estimate\": {:.6e}}}",
+                         r.step, r.alpha, r.force, estimate->force_error,
+                         r.force != 0.0 ? estimate->force_error / std::abs(r.force) : 0.0, estimate->force_extrapolated,
+                         estimate->force_order, estimate->order_observed ? "true" : "false", r.half_width,
+                         estimate->width_error);
+    };
+    const IncrementRecord* peak = &records_.front();
+    for (const IncrementRecord& r : records_)
+      if (std::abs(r.force) > std::abs(peak->force)) peak = &r;
+    final_estimate = e.at(records_.back());
+    // The companions' cost against the rest of the run (planning, model, stepping, output).
+    double estimate_seconds = 0.0, run_seconds = 0.0;
+    for (const auto& [phase, seconds] : times.phases()) (phase == "error estimate" ? estimate_seconds : run_seconds) += seconds;
+    out += fmt::format("  \"error_estimate\": {{\"method\": \"{}\", \"contact_nodes\": {}, "
+                       "\"companion_contact_nodes\": [{}], \"P_nominal_order\": {}, \"a_order\": {},\n"
+                       "    \"final\": {},\n    \"peak\": {},\n"
+                       "    \"time_s\": {:.6f}, \"cost_fraction\": {}}},\n",
+                       e.method() == ErrorEstimateChoice::observed ? "observed" : "richardson", e.contact_nodes(),
+                       companions, DiscretizationErrorEstimate::nominal_force_order,
+                       DiscretizationErrorEstimate::nominal_width_order, at_row(records_.back()), at_row(*peak),
+                       estimate_seconds, run_seconds > 0.0 ? fmt::format("{:.4f}", estimate_seconds / run_seconds) : "null");
+  }
+  if (target_choice_) {
+    std::string attempts;
+    for (const auto& a : target_choice_->attempts)
+      attempts += fmt::format("{}{{\"role\": \"{}\", \"contact_nodes\": {}, \"P_relative_error_estimate\": {:.6e}}}",
+                              attempts.empty() ? "" : ", ", a.role, a.contact_nodes, a.relative_error);
+    std::string reached = "null", met = "null";
+    if (final_estimate && !records_.empty() && records_.back().force != 0.0) {
+      const double relative = final_estimate->force_error / std::abs(records_.back().force);
+      reached = fmt::format("{:.6e}", relative);
+      met = relative <= target_choice_->target ? "true" : "false";
+    }
+    out += fmt::format("  \"target_error\": {{\"target\": {}, \"before\": [{}], \"contact_nodes\": {}, "
+                       "\"P_relative_error_estimate\": {}, \"met\": {}}},\n",
+                       target_choice_->target, attempts, error_estimate_ ? error_estimate_->contact_nodes() : 0,
+                       reached, met);
+  }
+  return out;
 }
 
 void RunOutput::fail(const std::string& message) noexcept {

@@ -51,6 +51,9 @@ constexpr Choice<PunchShapeKind> shape_names[] = {{"sphere", PunchShapeKind::sph
                                                   {"flat", PunchShapeKind::flat},
                                                   {"profile", PunchShapeKind::profile},
                                                   {"cylinder", PunchShapeKind::sphere}};
+constexpr Choice<ErrorEstimateChoice> error_estimate_names[] = {{"richardson", ErrorEstimateChoice::richardson},
+                                                                {"observed", ErrorEstimateChoice::observed},
+                                                                {"off", ErrorEstimateChoice::off}};
 constexpr Choice<FarFieldChoice> far_field_names[] = {
     {"auto", FarFieldChoice::automatic}, {"condense", FarFieldChoice::condense}, {"full", FarFieldChoice::full}};
 
@@ -624,6 +627,15 @@ const std::vector<KeyDeclaration>& key_declarations() {
     k.push_back(optional_number_key({"mesh", "growth", "number", "[1, 2]", "",
                                      "override: growth ratio of the far field (default 1 + 2.5 / contact_nodes)"},
                                     [](auto& c) -> auto& { return c.mesh.growth; }));
+    k.push_back(choice_key({"mesh", "error_estimate", "choice", "", "",
+                            "richardson: a companion run at half the contact_nodes gives each increment's "
+                            "discretization error of P and a (curve.csv, summary.json); observed: a second one at "
+                            "a quarter measures the order; off"},
+                           error_estimate_names, [](auto& c) -> auto& { return c.mesh.error_estimate; }));
+    k.push_back(optional_number_key({"mesh", "target_error", "number", "[1e-5, 0.1]", "",
+                                     "relative error of the final P asked for: the run chooses contact_nodes from a "
+                                     "pilot, checks its estimate and refines once if it was missed"},
+                                    [](auto& c) -> auto& { return c.mesh.target_error; }));
     {
       KeyDeclaration dir{"output", "dir", "string", "not empty", "", "output folder (relative to the working directory)"};
       dir.read = [](const Reader& r, LoadCase& lc) { r.read_string("output", "dir", lc.output.dir); };
@@ -863,6 +875,12 @@ void validate(const LoadCase& lc) {
   if (lc.mesh.fine_depth) positive("mesh.fine_depth", *lc.mesh.fine_depth);
   if (lc.mesh.growth && !(*lc.mesh.growth >= 1.0 && *lc.mesh.growth <= 2.0))
     fail("mesh.growth", fmt::format("must lie in [1, 2] (got {})", *lc.mesh.growth));
+  if (lc.mesh.target_error) {
+    if (!(*lc.mesh.target_error >= 1e-5 && *lc.mesh.target_error <= 0.1))
+      fail("mesh.target_error", fmt::format("must lie in [1e-5, 0.1] (got {})", *lc.mesh.target_error));
+    if (lc.mesh.error_estimate == ErrorEstimateChoice::off)
+      fail("mesh.target_error", "needs an error estimate: mesh.error_estimate = \"off\" cannot check a target");
+  }
 
   validate_analysis(lc);
   if (lc.output.dir.empty()) fail("output.dir", "must not be empty");
