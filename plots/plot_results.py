@@ -145,6 +145,18 @@ def plot_curve(case, name, curve, summary, outdir):
         drawn.add(label)
     peak = max(curve, key=lambda r: float(r["P"]))
     ax.plot(float(peak["alpha"]) * 1e6, scene.force(peak["P"]), "k*", ms=10, label="peak")
+    # The run's own discretization error (mesh.error_estimate): a band of P +- the estimate, and
+    # the figure at the peak in the legend (a band of 0.1% is thinner than the line).
+    with_error = [r for r in curve if r.get("P_error_estimate")]
+    if with_error:
+        alphas = [float(r["alpha"]) * 1e6 for r in with_error]
+        ax.fill_between(alphas, [scene.force(float(r["P"]) - float(r["P_error_estimate"])) for r in with_error],
+                        [scene.force(float(r["P"]) + float(r["P_error_estimate"])) for r in with_error],
+                        color="tab:gray", alpha=0.35, lw=0, zorder=1)
+        if peak.get("P_error_estimate") and float(peak["P"]) > 0:
+            relative = float(peak["P_error_estimate"]) / float(peak["P"])
+            ax.fill_between([], [], [], color="tab:gray", alpha=0.35, lw=0,
+                            label=f"discretization error ± {100 * relative:.2g}% at the peak")
     for u in summary.get("unloading", []):
         h, p, stiffness = u["depth"], u["force"], u["stiffness"]
         if stiffness > 0:
