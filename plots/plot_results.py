@@ -26,6 +26,7 @@ run): FILE.png and FILE.svg beside it.
 Needs Debian's python3-matplotlib (installed by scripts/install-deps.sh).
 """
 import argparse
+import base64
 import csv
 import json
 import math
@@ -35,6 +36,7 @@ import tomllib
 import xml.etree.ElementTree as ET
 
 import matplotlib
+import numpy as np
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -244,13 +246,26 @@ def vtu_of_step(outdir, step):
     return outdir / written[step]
 
 
+VTK_TYPES = {"Float64": "<f8", "Float32": "<f4", "Int64": "<i8", "Int32": "<i4", "UInt8": "u1"}
+
+
+def decode_data_array(d):
+    """Values of a VTK XML DataArray: format="binary" (base64 of a UInt64 byte count and the raw
+    little-endian values, as indentsim writes them) or "ascii" (older runs)."""
+    if d.get("format") == "binary":
+        raw = base64.b64decode("".join(d.text.split()))
+        size = int.from_bytes(raw[:8], "little")
+        return np.frombuffer(raw[8:8 + size], dtype=VTK_TYPES[d.get("type")]).astype(float).tolist()
+    return [float(v) for v in d.text.split()]
+
+
 def read_vtu(path):
     piece = ET.parse(path).getroot().find("UnstructuredGrid").find("Piece")
 
     def array(parent, name):
         for d in piece.find(parent).findall("DataArray"):
             if d.get("Name") == name:
-                return [float(v) for v in d.text.split()]
+                return decode_data_array(d)
         raise KeyError(name)
 
     points = array("Points", "coordinates")

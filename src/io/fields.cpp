@@ -1,6 +1,9 @@
 #include "indentsim/fields.hpp"
 
+#include <bit>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <cstdio>
 #include <fstream>
 #include <stdexcept>
@@ -91,16 +94,56 @@ std::string profiles_csv(const Mesh& mesh, const std::vector<int>& lines, const 
 
 namespace {
 
-template <class F>
-void data_array(std::string& out, const char* type, const char* name, int components, std::size_t count, F value) {
-  out += fmt::format("        <DataArray type=\"{}\" Name=\"{}\" NumberOfComponents=\"{}\" format=\"ascii\">\n", type,
-                     name, components);
-  for (std::size_t k = 0; k < count; ++k) {
-    out += "          ";
-    for (int c = 0; c < components; ++c) out += fmt::format("{}{:.9g}", c ? " " : "", static_cast<double>(value(k, c)));
-    out += '\n';
+// VTK XML "binary" arrays: base64 of a UInt64 byte count followed by the raw little-endian values
+// (the VTKFile's header_type).  Five times smaller than ASCII and written without formatting a
+// number: the ASCII writer spent most of a small elastic run's wall time (0.2 s of 0.45 s for 6
+// frames of the paper mesh), and the values keep every bit.
+void append_base64(std::string& out, const unsigned char* bytes, std::size_t size) {
+  static constexpr char alphabet[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::size_t k = 0;
+  for (; k + 3 <= size; k += 3) {
+    const unsigned v = (bytes[k] << 16) | (bytes[k + 1] << 8) | bytes[k + 2];
+    out += alphabet[(v >> 18) & 63];
+    out += alphabet[(v >> 12) & 63];
+    out += alphabet[(v >> 6) & 63];
+    out += alphabet[v & 63];
   }
-  out += "        </DataArray>\n";
+  if (const std::size_t rest = size - k; rest > 0) {
+    const unsigned v = (bytes[k] << 16) | (rest == 2 ? bytes[k + 1] << 8 : 0);
+    out += alphabet[(v >> 18) & 63];
+    out += alphabet[(v >> 12) & 63];
+    out += rest == 2 ? alphabet[(v >> 6) & 63] : '=';
+    out += '=';
+  }
+}
+
+template <class T> constexpr const char* vtk_type();
+template <> constexpr const char* vtk_type<double>() { return "Float64"; }
+template <> constexpr const char* vtk_type<std::int32_t>() { return "Int32"; }
+template <> constexpr const char* vtk_type<std::int64_t>() { return "Int64"; }
+template <> constexpr const char* vtk_type<std::uint8_t>() { return "UInt8"; }
+
+template <class T>
+void binary_array(std::string& out, const char* name, int components, const std::vector<T>& values) {
+  static_assert(std::endian::native == std::endian::little, "the VTU files declare LittleEndian");
+  out += fmt::format("        <DataArray type=\"{}\" Name=\"{}\" NumberOfComponents=\"{}\" format=\"binary\">\n          ",
+                     vtk_type<T>(), name, components);
+  // One base64 stream of header and data (VTK decodes the two together when they share it).
+  std::vector<unsigned char> bytes(sizeof(std::uint64_t) + values.size() * sizeof(T));
+  const std::uint64_t size = values.size() * sizeof(T);
+  std::memcpy(bytes.data(), &size, sizeof size);
+  if (!values.empty()) std::memcpy(bytes.data() + sizeof size, values.data(), size);
+  append_base64(out, bytes.data(), bytes.size());
+  out += "\n        </DataArray>\n";
+}
+
+template <class T, class F>
+void data_array(std::string& out, const char* name, int components, std::size_t count, F value) {
+  std::vector<T> values;
+  values.reserve(count * static_cast<std::size_t>(components));
+  for (std::size_t k = 0; k < count; ++k)
+    for (int c = 0; c < components; ++c) values.push_back(static_cast<T>(value(k, c)));
+  binary_array(out, name, components, values);
 }
 
 }  // namespace
@@ -136,9 +179,9 @@ std::string vtu_document(const FieldFrame& frame, const Mesh& mesh, const double
     }
 
   std::string out;
-  out.reserve(nodes * 200);
+  out.reserve(nodes * 150);
   out += "<?xml version=\"1.0\"?>\n";
-  out += "<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n  <UnstructuredGrid>\n";
+  out += "<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n  <UnstructuredGrid>\n";
   // The depth and the increment as field data: the series' time value is the increment (alpha
   // repeats along a load history), and ParaView shows both per frame.
   out += fmt::format("    <FieldData>\n      <DataArray type=\"Float64\" Name=\"alpha\" NumberOfTuples=\"1\" "
@@ -147,36 +190,37 @@ std::string vtu_document(const FieldFrame& frame, const Mesh& mesh, const double
                      frame.alpha, frame.step);
   out += fmt::format("    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n", nodes, cells);
   out += "      <PointData Vectors=\"displacement\">\n";
-  data_array(out, "Float64", "displacement", 3, nodes, displacement);
+  data_array<double>(out, "displacement", 3, nodes, displacement);
   // Component 33 is the out-of-plane stress of plane strain, the hoop stress of axisymmetry.
   const std::string third = mesh.kinematics().out_of_plane_stress();
   const std::string stress_names[5] = {"sigma11", "sigma22", "sigma12", third, "strain_intensity"};
   for (int c = 0; c < 5; ++c)
-    data_array(out, "Float64", stress_names[c].c_str(), 1, nodes, [&](std::size_t n, int) { return nodal.values[n][c]; });
-  data_array(out, "Int32", "contact_status", 1, nodes, [&](std::size_t n, int) { return status[n]; });
-  data_array(out, "Float64", "contact_pressure", 1, nodes, [&](std::size_t n, int) { return pressure[n]; });
+    data_array<double>(out, stress_names[c].c_str(), 1, nodes, [&](std::size_t n, int) { return nodal.values[n][c]; });
+  data_array<std::int32_t>(out, "contact_status", 1, nodes, [&](std::size_t n, int) { return status[n]; });
+  data_array<double>(out, "contact_pressure", 1, nodes, [&](std::size_t n, int) { return pressure[n]; });
   out += "      </PointData>\n      <CellData>\n";
   const std::string cell_names[6] = {"sigma11", "sigma22", "sigma12", third, "strain_intensity", "omega"};
   for (int c = 0; c < 6; ++c)
-    data_array(out, "Float64", cell_names[c].c_str(), 1, cells, [&](std::size_t e, int) { return cell[e][c]; });
-  data_array(out, "Int32", "plastic", 1, cells, [&](std::size_t e, int) { return cell[e][6] > 0 ? 1 : 0; });
-  data_array(out, "Int32", "plastic_points", 1, cells, [&](std::size_t e, int) { return cell[e][6]; });
+    data_array<double>(out, cell_names[c].c_str(), 1, cells, [&](std::size_t e, int) { return cell[e][c]; });
+  data_array<std::int32_t>(out, "plastic", 1, cells, [&](std::size_t e, int) { return cell[e][6] > 0 ? 1 : 0; });
+  data_array<std::int32_t>(out, "plastic_points", 1, cells, [&](std::size_t e, int) { return cell[e][6]; });
   out += "      </CellData>\n      <Points>\n";
-  data_array(out, "Float64", "coordinates", 3, nodes, [&](std::size_t n, int c) {
+  data_array<double>(out, "coordinates", 3, nodes, [&](std::size_t n, int c) {
     const int i = static_cast<int>(n) / mesh.nodes_y(), j = static_cast<int>(n) % mesh.nodes_y();
     return c == 0 ? mesh.x(i) : c == 1 ? mesh.y(j) : 0.0;
   });
   out += "      </Points>\n      <Cells>\n";
-  out += "        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
+  std::vector<std::int64_t> connectivity, offsets;
+  connectivity.reserve(4 * cells);
   for (int ei = 0; ei < mesh.elements_x(); ++ei)
     for (int ej = 0; ej < mesh.elements_y(); ++ej)  // counter-clockwise, as VTK_QUAD wants
-      out += fmt::format("          {} {} {} {}\n", mesh.node(ei, ej), mesh.node(ei + 1, ej), mesh.node(ei + 1, ej + 1),
-                         mesh.node(ei, ej + 1));
-  out += "        </DataArray>\n        <DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
-  for (std::size_t e = 1; e <= cells; ++e) out += fmt::format("          {}\n", 4 * e);
-  out += "        </DataArray>\n        <DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
-  for (std::size_t e = 0; e < cells; ++e) out += "          9\n";
-  out += "        </DataArray>\n      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n";
+      for (int node : {mesh.node(ei, ej), mesh.node(ei + 1, ej), mesh.node(ei + 1, ej + 1), mesh.node(ei, ej + 1)})
+        connectivity.push_back(node);
+  for (std::size_t e = 1; e <= cells; ++e) offsets.push_back(static_cast<std::int64_t>(4 * e));
+  binary_array(out, "connectivity", 1, connectivity);
+  binary_array(out, "offsets", 1, offsets);
+  binary_array(out, "types", 1, std::vector<std::uint8_t>(cells, 9));  // VTK_QUAD
+  out += "      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n";
   return out;
 }
 
