@@ -1,6 +1,9 @@
 // KLU and CHOLMOD under KINSOL: the same curves to solver tolerance, with contact (active rows
 // eliminated for the Cholesky), plasticity, unloading and separation.
+#include <dlfcn.h>
+
 #include <cmath>
+#include <cstdlib>
 
 #include <gtest/gtest.h>
 
@@ -72,4 +75,15 @@ TEST(ActiveSetCycling, ReturningToAnEarlierSetWithoutProgressIsACycle) {
   EXPECT_FALSE(h.record(1, 1.0));
   EXPECT_FALSE(h.record(2, 0.5));
   EXPECT_FALSE(h.record(1, 0.01));  // a node flipped back, but the residual fell 100x: progress
+}
+
+// worker_threads.hpp: after a run, OpenBLAS (Debian's pthreads build, which CHOLMOD calls) runs
+// on one thread unless the environment asked for more.
+TEST(LinearSolvers, OneBlasThreadPerRunUnlessTheEnvironmentAsks) {
+  using Getter = int (*)();
+  const auto get = reinterpret_cast<Getter>(dlsym(RTLD_DEFAULT, "openblas_get_num_threads"));
+  if (!get) GTEST_SKIP() << "no OpenBLAS in this process";
+  curve("elastic.toml", {"mesh.contact_nodes=6", "solver.linear=cholmod"});
+  if (const char* asked = std::getenv("OPENBLAS_NUM_THREADS")) EXPECT_EQ(get(), std::atoi(asked));
+  else EXPECT_EQ(get(), 1);
 }

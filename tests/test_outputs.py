@@ -13,6 +13,7 @@ Runs a small plastic case with fields at every increment, then checks that
   - plots/plot_results.py writes non-empty PNG and SVG figures.
 Prints 'N passed, N failed' and exits non-zero on any failure.
 """
+import base64
 import csv
 import json
 import os
@@ -21,6 +22,8 @@ import subprocess
 import sys
 import tempfile
 import xml.etree.ElementTree as ET
+
+import numpy
 
 failures = []
 passed = 0
@@ -39,12 +42,27 @@ def data_arrays(parent):
     return {d.get("Name"): d for d in parent.findall("DataArray")}
 
 
+NUMPY_TYPES = {"Float64": "<f8", "Int32": "<i4", "Int64": "<i8", "UInt8": "u1"}
+
+
+def values_of(array):
+    """The values of a DataArray as VTK's XML reader decodes them: format="binary" is base64 of a
+    UInt64 byte count (the file's header_type) followed by the raw little-endian values."""
+    if array.get("format") != "binary":
+        return array.text.split()
+    raw = base64.b64decode("".join(array.text.split()), validate=True)
+    size = int.from_bytes(raw[:8], "little")
+    check(size == len(raw) - 8, f"DataArray {array.get('Name')}: header says {size} bytes, {len(raw) - 8} follow")
+    return numpy.frombuffer(raw[8:8 + size], dtype=NUMPY_TYPES[array.get("type")]).tolist()
+
+
 def check_vtu(path):
     root = ET.parse(path).getroot()
     check(root.tag == "VTKFile" and root.get("type") == "UnstructuredGrid", f"{path.name}: not a VTK UnstructuredGrid")
+    check(root.get("byte_order") == "LittleEndian" and root.get("header_type") == "UInt64", f"{path.name}: binary layout")
     piece = root.find("UnstructuredGrid").find("Piece")
     points, cells = int(piece.get("NumberOfPoints")), int(piece.get("NumberOfCells"))
-    coordinates = [float(v) for v in data_arrays(piece.find("Points"))["coordinates"].text.split()]
+    coordinates = [float(v) for v in values_of(data_arrays(piece.find("Points"))["coordinates"])]
     check(len(coordinates) == 3 * points, f"{path.name}: coordinates size")
     nx = len({coordinates[3 * k] for k in range(points)})
     ny = len({coordinates[3 * k + 1] for k in range(points)})
@@ -54,7 +72,7 @@ def check_vtu(path):
         arrays = data_arrays(piece.find(section))
         check(len(arrays) >= 5, f"{path.name}: {section} has {len(arrays)} arrays")
         for name, array in arrays.items():
-            values = array.text.split()
+            values = values_of(array)
             components = int(array.get("NumberOfComponents", "1"))
             check(len(values) == count * components, f"{path.name}: {section}/{name} has {len(values)} values")
     for name in ("displacement", "sigma22", "contact_status"):
@@ -62,9 +80,9 @@ def check_vtu(path):
     for name in ("strain_intensity", "omega", "plastic"):
         check(name in data_arrays(piece.find("CellData")), f"{path.name}: cell array {name} missing")
     cell_arrays = data_arrays(piece.find("Cells"))
-    connectivity = [int(v) for v in cell_arrays["connectivity"].text.split()]
-    offsets = [int(v) for v in cell_arrays["offsets"].text.split()]
-    types = [int(v) for v in cell_arrays["types"].text.split()]
+    connectivity = [int(v) for v in values_of(cell_arrays["connectivity"])]
+    offsets = [int(v) for v in values_of(cell_arrays["offsets"])]
+    types = [int(v) for v in values_of(cell_arrays["types"])]
     check(len(connectivity) == 4 * cells and all(0 <= n < points for n in connectivity), f"{path.name}: connectivity")
     check(offsets == [4 * (e + 1) for e in range(cells)], f"{path.name}: offsets")
     check(types == [9] * cells, f"{path.name}: cell types are not all VTK_QUAD")

@@ -1,4 +1,5 @@
 #include "indentsim/simulation.hpp"
+#include "indentsim/worker_threads.hpp"
 #include "indentsim/unloading_stiffness.hpp"
 
 #include "indentsim/interruption.hpp"
@@ -189,6 +190,7 @@ Simulation::Simulation(LoadCase load_case, const RunPlan& plan) : load_case_(std
 }
 
 void Simulation::build(const RunPlan& run_plan, const std::optional<NearField>& near_field) {
+  limit_library_threads();  // one BLAS/OpenMP thread per run (worker_threads.hpp)
   const auto& m = load_case_.material;
   const ElasticMaterial material{m.E, m.nu};
   std::optional<IlyushinLaw> law;
