@@ -154,6 +154,43 @@ TEST(FarFieldCondensation, AResumedRunContinuesOnTheGrownNearField) {
   EXPECT_THROW(second.restore(broken), std::invalid_argument);
 }
 
+// With a pilot, the near field starts as large as the first increments' plastic zone and grows
+// ahead of it: smaller Newton systems early, no increment repeated, the same curve as the whole
+// mesh, and a run resumed between two growths grows at the same increments (bit for bit).
+TEST(FarFieldCondensation, TheNearFieldGrowsAheadOfThePilotsPlasticZone) {
+  for (const char* name : {"deep_plastic.toml", "power_law.toml"}) {
+    SCOPED_TRACE(name);
+    const LoadCase lc = shipped_case(name, {"mesh.contact_nodes=10", "solver.far_field=condense"});
+    Simulation run(lc);
+    const NearField first = run.near_field();
+    std::vector<IncrementRecord> rows;
+    std::vector<SimulationState> states;
+    run.run([&](const IncrementRecord& r) {
+      rows.push_back(r);
+      states.push_back(run.state());
+    });
+    EXPECT_GE(run.near_field_rebuilds(), 1);
+    EXPECT_EQ(run.near_field_growths(), 0) << "the pilot's zone (with its margin) should hold the plastic zone";
+    EXPECT_LT(first.elements_x * first.elements_y, run.near_field().elements_x * run.near_field().elements_y);
+    ASSERT_FALSE(states.front().plastic_zone_growth.empty());
+
+    Outcome grown{rows, run.displacement(), run.near_field(), 0, 0};
+    LoadCase whole = lc;
+    whole.solver.far_field = FarFieldChoice::full;
+    expect_same_curve(grown, solve(whole), 1e-9);
+
+    // Resume from the first increment (before the later growths): the same rows, bit for bit.
+    Simulation resumed(lc, run.plan().contact_half_width_estimate, states[1].near_field);
+    resumed.restore(states[1]);
+    std::vector<IncrementRecord> rest;
+    resumed.run([&](const IncrementRecord& r) { rest.push_back(r); });
+    ASSERT_EQ(rest.size() + 2, rows.size());
+    for (std::size_t k = 0; k < rest.size(); ++k) EXPECT_EQ(rest[k].force, rows[k + 2].force) << "step " << k + 2;
+    EXPECT_EQ(resumed.near_field(), run.near_field());
+    EXPECT_EQ(resumed.displacement(), run.displacement());
+  }
+}
+
 TEST(ChordSteps, KeepTheCurveAndSaveFactorizations) {
   for (const char* name : {"paper.toml", "deep_plastic.toml"}) {
     SCOPED_TRACE(name);

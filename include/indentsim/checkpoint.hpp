@@ -23,7 +23,7 @@ namespace indentsim {
 
 // Format 2: the condensed near field joined the state.  Format 3: the material history holds four
 // strain components (eps33, the hoop strain of axisymmetry).  No older format is read.
-constexpr std::uint32_t checkpoint_format_version = 3;
+constexpr std::uint32_t checkpoint_format_version = 4;  // 4: the pilot's plastic zone growth
 
 struct Checkpoint {
   std::string load_case_toml;            ///< to_toml() of the load case as run

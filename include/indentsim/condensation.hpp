@@ -43,6 +43,17 @@ struct PlasticExtent {
   double width = 0.0, depth = 0.0;
 };
 
+/// How the plastic zone grows with the depth of indentation: the extents a pilot run measured at
+/// its increments (depths increasing).  Between them the extent is interpolated linearly; below
+/// the first it scales as sqrt(depth) -- the contact width of a sphere or cylinder, generous for
+/// a cone, whose zone grows linearly -- and beyond the last it is the last.
+struct PlasticZoneGrowth {
+  std::vector<double> depths;
+  std::vector<PlasticExtent> extents;
+  PlasticExtent at(double depth) const;
+  bool empty() const { return depths.empty(); }
+};
+
 class FarFieldCondensation {
 public:
   /// Factors K_FF and forms K_red.  `contact` holds the candidates of the whole mesh; those among

@@ -36,6 +36,7 @@ struct SimulationState {
   std::vector<double> history;        ///< the bulk model's carried material state
   std::vector<char> in_contact;       ///< the active contact set at u (implied by u; kept as a check)
   NearField near_field;               ///< what the Newton iterations solve for (it may have grown)
+  PlasticZoneGrowth plastic_zone_growth;  ///< the pilot's, which grows near_field ahead (empty: none)
 };
 
 /// The mesh a run uses: planned from the Hertz estimate of the contact, or for a plastic case
@@ -43,7 +44,7 @@ struct SimulationState {
 /// exactly this plan.  `planned_contact_half_width` (a resumed run) skips the pilot.
 struct RunPlan {
   MeshPlan mesh;
-  std::optional<PlasticExtent> plastic_zone;  ///< from the pilot, sizes the condensed near field
+  PlasticZoneGrowth plastic_zone;  ///< from the pilot, sizes the condensed near field as it grows
 };
 RunPlan plan_run(const LoadCase& load_case, std::optional<double> planned_contact_half_width = std::nullopt);
 
@@ -140,6 +141,8 @@ public:
   /// Times the near field had to grow (a far element would have yielded, or a far surface node
   /// would have penetrated the punch) and an increment was repeated.
   int near_field_growths() const { return near_field_growths_; }
+  /// How often the near field was grown ahead of the plastic zone (anticipate_plastic_zone).
+  int near_field_rebuilds() const { return near_field_rebuilds_; }
   /// Wall-clock time of this simulation's phases: planning (with the pilot run), model (mesh,
   /// assembly, laws, contact, condensation, KINSOL set-up), stepping (the increments, including a
   /// rebuild when the near field grows).  The driver adds its own (output).
@@ -170,6 +173,9 @@ private:
   /// In a condensed run: grows near_ if the converged full solution `u` at depth `alpha` breaks the
   /// condensation's assumption; true if it grew (the increment must be repeated).
   bool grow_near_field(const std::vector<double>& u, double alpha);
+  /// Grows the near field ahead of the pilot's plastic zone before an increment to `target`.
+  void anticipate_plastic_zone(double target);
+  NearField near_field_for_depth(double depth) const;
 
   LoadCase load_case_;
   MeshPlan plan_;
@@ -187,6 +193,8 @@ private:
   std::unique_ptr<NewtonSolver> newton_;                    // null until the system is built
   long retired_symbolic_analyses_ = 0;                      // of systems replaced by a larger near field
   int near_field_growths_ = 0;
+  int near_field_rebuilds_ = 0;
+  PlasticZoneGrowth plastic_zone_growth_;  // the pilot's, empty without one
 
   double alpha_ = 0.0, alpha_previous_ = 0.0;
   double deepest_ = 0.0;  ///< the largest converged depth so far (the load path's peak)

@@ -195,8 +195,10 @@ int drive(Simulation& sim, RunOutput& output, const std::string& label, bool qui
     }
     show_warnings();
     if (!quiet) {
-      if (sim.near_field_growths() > 0) {
-        fmt::print("the near field grew {} time(s) during the run; ", sim.near_field_growths());
+      if (sim.near_field_growths() > 0 || sim.near_field_rebuilds() > 0) {
+        fmt::print("the near field grew {} time(s) ahead of the plastic zone and {} time(s) after an increment "
+                   "left it; ",
+                   sim.near_field_rebuilds(), sim.near_field_growths());
         describe_near_field(sim);
       }
       fmt::print("largest condition estimate of a Newton matrix: {:.3g} ({})\n", sim.largest_condition_estimate(),

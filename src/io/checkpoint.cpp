@@ -204,6 +204,14 @@ std::string serialize(const Checkpoint& c) {
   payload.put<std::int32_t>(s.near_field.contact_nodes);
   payload.put<std::int32_t>(s.near_field.elements_x);
   payload.put<std::int32_t>(s.near_field.elements_y);
+  payload.put_vector(s.plastic_zone_growth.depths);
+  std::vector<double> widths, depths;
+  for (const auto& e : s.plastic_zone_growth.extents) {
+    widths.push_back(e.width);
+    depths.push_back(e.depth);
+  }
+  payload.put_vector(widths);
+  payload.put_vector(depths);
   payload.put<std::uint64_t>(c.curve.size());
   for (const auto& r : c.curve) write_record(payload, r);
   payload.put_vector(c.free_surface_depths);
@@ -264,6 +272,12 @@ Checkpoint deserialize(const std::string& bytes, const std::string& source) {
   s.near_field.contact_nodes = in.get<std::int32_t>("the near field");
   s.near_field.elements_x = in.get<std::int32_t>("the near field");
   s.near_field.elements_y = in.get<std::int32_t>("the near field");
+  s.plastic_zone_growth.depths = in.get_vector<double>("the plastic zone growth");
+  const auto widths = in.get_vector<double>("the plastic zone growth");
+  const auto depths = in.get_vector<double>("the plastic zone growth");
+  if (widths.size() != depths.size() || widths.size() != s.plastic_zone_growth.depths.size())
+    in.fail("its plastic zone growth has lists of different lengths");
+  for (std::size_t k = 0; k < widths.size(); ++k) s.plastic_zone_growth.extents.push_back({widths[k], depths[k]});
   const auto rows = in.get<std::uint64_t>("the curve");
   if (rows > in.left()) in.fail("claims more curve rows than the file holds");
   for (std::uint64_t k = 0; k < rows; ++k) c.curve.push_back(read_record(in));

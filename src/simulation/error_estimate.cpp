@@ -52,7 +52,7 @@ CompanionRun run_companion(const Simulation& main, int contact_nodes) {
   // The main run's planned contact width; not its pilot's plastic zone, which a resumed run no
   // longer has: the companion's near field is sized from the width alone (and grows if need be),
   // so that a resumed run's estimate is the original's bit for bit.
-  const RunPlan plan{plan_mesh(lc, main.plan().contact_half_width_estimate), std::nullopt};
+  const RunPlan plan{plan_mesh(lc, main.plan().contact_half_width_estimate), {}};
   try {
     Simulation sim(lc, plan);
     sim.run([&](const IncrementRecord& r) { companion.curve.push_back(r); });

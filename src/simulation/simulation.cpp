@@ -29,13 +29,13 @@ constexpr double min_plausible_modulus = 1e3, max_plausible_modulus = 2e12;  // 
 // Plastic scenes spread their contact wider than the elastic Hertz estimate, up to the punch's
 // chord sqrt(2 R alpha) when the material flows freely.  A coarse pilot run of the same load
 // case (8 elements across the chord, 4 increments) measures the final contact half-width and
-// how far the plastic zone reaches; the real mesh is planned from the first with a 5% margin, the
-// condensed near field from the second.  The pilot sets mesh.contact_half_width itself, so it
+// how far the plastic zone reaches at each of its increments; the real mesh is planned from the
+// first with a 5% margin, the condensed near field from the second, as it grows with the depth.  The pilot sets mesh.contact_half_width itself, so it
 // never runs a pilot of its own, and solves its small mesh whole.  Should it fail, the chord is a
 // safe upper bound and the near field falls back to its default.
 struct PilotResult {
   double contact_half_width = 0.0;
-  std::optional<PlasticExtent> plastic_zone;
+  PlasticZoneGrowth plastic_zone;
 };
 
 PilotResult pilot_run(const LoadCase& lc) {
@@ -53,21 +53,25 @@ PilotResult pilot_run(const LoadCase& lc) {
   double widest = 0.0;
   try {
     Simulation sim(pilot);
-    sim.run([&](const IncrementRecord& r) { widest = std::max(widest, r.half_width); });
-    PilotResult result{widest > 0.0 ? std::min(chord, 1.05 * widest) : chord, std::nullopt};
-    const Mesh& mesh = sim.mesh();
-    PlasticExtent zone;
-    for (int ei = 0; ei < mesh.elements_x(); ++ei)
-      for (int ej = 0; ej < mesh.elements_y(); ++ej)
-        for (std::size_t g = 0; g < 4; ++g)
-          if (sim.plasticity()->law().has_yielded(4 * static_cast<std::size_t>(mesh.element(ei, ej)) + g)) {
-            zone.width = std::max(zone.width, mesh.x(ei + 1));
-            zone.depth = std::max(zone.depth, -mesh.y(ej));
-          }
-    result.plastic_zone = zone;
-    return result;
+    PlasticZoneGrowth growth;
+    sim.run([&](const IncrementRecord& r) {
+      widest = std::max(widest, r.half_width);
+      if (r.step == 0) return;
+      const Mesh& mesh = sim.mesh();
+      PlasticExtent zone;
+      for (int ei = 0; ei < mesh.elements_x(); ++ei)
+        for (int ej = 0; ej < mesh.elements_y(); ++ej)
+          for (std::size_t g = 0; g < 4; ++g)
+            if (sim.plasticity()->law().has_yielded(4 * static_cast<std::size_t>(mesh.element(ei, ej)) + g)) {
+              zone.width = std::max(zone.width, mesh.x(ei + 1));
+              zone.depth = std::max(zone.depth, -mesh.y(ej));
+            }
+      growth.depths.push_back(r.alpha);
+      growth.extents.push_back(zone);
+    });
+    return {widest > 0.0 ? std::min(chord, 1.05 * widest) : chord, growth};
   } catch (const SolverError&) {
-    return {chord, std::nullopt};
+    return {chord, {}};
   }
 }
 
@@ -163,7 +167,7 @@ std::vector<std::string> plausibility_warnings(const LoadCase& lc, const MeshPla
 }
 
 RunPlan plan_run(const LoadCase& load_case, std::optional<double> planned_contact_half_width) {
-  RunPlan plan{plan_mesh(load_case), std::nullopt};  // also refuses a mesh too large before any work
+  RunPlan plan{plan_mesh(load_case), {}};  // also refuses a mesh too large before any work
   if (planned_contact_half_width) {
     plan.mesh = plan_mesh(load_case, planned_contact_half_width);
   } else if (load_case.material.model != MaterialModel::elastic && !load_case.mesh.contact_half_width) {
@@ -201,7 +205,6 @@ void Simulation::build(const RunPlan& run_plan, const std::optional<NearField>& 
                        *violation);
   }
   plan_ = run_plan.mesh;
-  const std::optional<PlasticExtent>& pilot_plastic_zone = run_plan.plastic_zone;
   const PhaseTimes::Scope timing = times_.measure("model");
   mesh_ = std::make_unique<Mesh>(Mesh::from_plan(load_case_, plan_));
   mesh_->set_element_kind(choose_element(load_case_));
@@ -225,7 +228,21 @@ void Simulation::build(const RunPlan& run_plan, const std::optional<NearField>& 
   settings_.tolerance = load_case_.solver.tolerance;
   settings_.max_iterations = load_case_.solver.max_newton;
   settings_.chord_steps = load_case_.solver.jacobian == JacobianChoice::reuse;
-  near_ = near_field ? *near_field : choose_near_field(load_case_, *mesh_, plan_, law.has_value(), pilot_plastic_zone);
+  if (near_field) {
+    near_ = *near_field;
+  } else if (run_plan.plastic_zone.empty()) {
+    near_ = choose_near_field(load_case_, *mesh_, plan_, law.has_value(), std::nullopt);
+  } else {
+    // Whether to condense is decided on the zone of the deepest point; the near field starts as
+    // large as the first increments need and grows with the zone (anticipate_plastic_zone).
+    plastic_zone_growth_ = run_plan.plastic_zone;
+    near_ = choose_near_field(load_case_, *mesh_, plan_, true, plastic_zone_growth_.at(load_case_.max_depth()));
+    if (near_.condensed) {
+      const std::vector<double> targets = plan_increments(load_case_.load);
+      const auto first = std::find_if(targets.begin(), targets.end(), [](double t) { return t > 0.0; });
+      if (first != targets.end()) near_ = near_field_for_depth(*first);
+    }
+  }
   build_system();
 
   u_.assign(static_cast<std::size_t>(mesh_->equations()), 0.0);
@@ -251,6 +268,7 @@ void Simulation::run(const std::function<void(const IncrementRecord&)>& on_incre
 IncrementRecord Simulation::advance_to(double target) {
   const PhaseTimes::Scope timing = times_.measure("stepping");
   const auto start = std::chrono::steady_clock::now();
+  anticipate_plastic_zone(target);
   SolveCounters counters;
   int cutbacks = 0;
   double step = target - alpha_;
@@ -388,6 +406,37 @@ void Simulation::from_system(const std::vector<double>& u_system, std::vector<do
   else u = u_system;
 }
 
+// The near field for the plastic zone the pilot saw at twice `depth` (at most the deepest point of
+// the path): sized ahead, so that it is rebuilt a few times over a run (each rebuild is a new
+// condensation) while the Newton systems of the early increments stay small -- the factorization
+// of the near field is most of a plastic run's time and grows as its unknowns^1.5.
+NearField Simulation::near_field_for_depth(double depth) const {
+  const double ahead = std::min(load_case_.max_depth(), 2.0 * depth);
+  NearField near = choose_near_field(load_case_, *mesh_, plan_, true, plastic_zone_growth_.at(ahead));
+  near.condensed = true;
+  return near;
+}
+
+// Before an increment to `target`: if the near field does not hold the pilot's plastic zone at
+// that depth (with the margins of choose_near_field), grow it ahead.  Only the load path and the
+// pilot decide, so a run resumed from a checkpoint (which holds near_) grows it at the same
+// increments.  grow_near_field stays the check after the fact.
+void Simulation::anticipate_plastic_zone(double target) {
+  if (!condensation_ || plastic_zone_growth_.empty()) return;
+  const double depth = std::max(target, deepest_);
+  const NearField needed =
+      choose_near_field(load_case_, *mesh_, plan_, true, plastic_zone_growth_.at(std::min(depth, load_case_.max_depth())));
+  if (needed.elements_x <= near_.elements_x && needed.elements_y <= near_.elements_y &&
+      needed.contact_nodes <= near_.contact_nodes)
+    return;
+  const NearField ahead = near_field_for_depth(depth);
+  near_.elements_x = std::max(near_.elements_x, ahead.elements_x);
+  near_.elements_y = std::max(near_.elements_y, ahead.elements_y);
+  near_.contact_nodes = std::max(near_.contact_nodes, ahead.contact_nodes);
+  ++near_field_rebuilds_;
+  build_system();
+}
+
 bool Simulation::grow_near_field(const std::vector<double>& u, double alpha) {
   if (!condensation_) return false;
   // A far surface node the punch would penetrate: the contact needs more candidates.
@@ -449,6 +498,7 @@ SimulationState Simulation::state() const {
   s.history = bulk_->history();
   s.in_contact = contact().in_contact;
   s.near_field = near_;
+  s.plastic_zone_growth = plastic_zone_growth_;
   return s;
 }
 
@@ -472,6 +522,14 @@ void Simulation::restore(const SimulationState& s) {
                          near.elements_x > mesh_->elements_x() || near.elements_y < 0 ||
                          near.elements_y > mesh_->elements_y()))
     throw std::invalid_argument("the saved near field does not fit this mesh");
+  const PlasticZoneGrowth& zone = s.plastic_zone_growth;
+  if (zone.depths.size() != zone.extents.size() || !std::is_sorted(zone.depths.begin(), zone.depths.end()) ||
+      !std::all_of(zone.depths.begin(), zone.depths.end(), [](double d) { return std::isfinite(d) && d > 0.0; }) ||
+      !std::all_of(zone.extents.begin(), zone.extents.end(), [](const PlasticExtent& e) {
+        return std::isfinite(e.width) && std::isfinite(e.depth) && e.width >= 0.0 && e.depth >= 0.0;
+      }))
+    throw std::invalid_argument("the saved plastic zone growth is not a list of depths and extents");
+  plastic_zone_growth_ = zone;
   if (!(s.near_field == near_)) {
     near_ = s.near_field;
     build_system();

@@ -1,6 +1,7 @@
 #include "indentsim/condensation.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <stdexcept>
 
@@ -10,6 +11,21 @@
 #include "cholmod_common.hpp"
 
 namespace indentsim {
+
+PlasticExtent PlasticZoneGrowth::at(double depth) const {
+  if (depths.empty() || depth <= 0.0) return {};
+  if (depth <= depths.front()) {
+    const double scale = std::sqrt(depth / depths.front());
+    return {scale * extents.front().width, scale * extents.front().depth};
+  }
+  for (std::size_t k = 1; k < depths.size(); ++k)
+    if (depth <= depths[k]) {
+      const double t = (depth - depths[k - 1]) / (depths[k] - depths[k - 1]);
+      const auto mix = [t](double lo, double hi) { return lo + t * (hi - lo); };
+      return {mix(extents[k - 1].width, extents[k].width), mix(extents[k - 1].depth, extents[k].depth)};
+    }
+  return extents.back();
+}
 
 // K_FF's factor lives as long as the condensation: every increment recovers u_F with it.
 struct FarFieldCondensation::FarFactor : CholmodCommon {
