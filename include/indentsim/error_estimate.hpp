@@ -53,7 +53,7 @@ std::optional<std::string> error_estimate_unavailable(const LoadCase& load_case)
 
 class DiscretizationErrorEstimate {
 public:
-  static constexpr double nominal_force_order = 2.0;
+  static constexpr double nominal_force_order = 2.0;  ///< of a bounded pressure (PunchShape)
   static constexpr double nominal_width_order = 1.0;
 
   /// Runs the companions of `main` (only its load case and plan are used; it need not have run):
@@ -75,6 +75,8 @@ public:
   std::optional<AtIncrement> at(const IncrementRecord& row) const;
 
   ErrorEstimateChoice method() const { return method_; }
+  /// The order assumed for P: the punch shape's (PunchShape::force_convergence_order).
+  double force_order() const { return force_order_; }
   int contact_nodes() const { return contact_nodes_; }  ///< of the main run
   const std::vector<CompanionRun>& companions() const { return companions_; }
   double wall_seconds() const;
@@ -84,6 +86,7 @@ private:
   const IncrementRecord* companion_row(std::size_t companion, const IncrementRecord& row) const;
 
   ErrorEstimateChoice method_;
+  double force_order_ = nominal_force_order;
   int contact_nodes_ = 0;
   std::vector<CompanionRun> companions_;
   std::vector<std::string> warnings_;

@@ -307,7 +307,7 @@ std::string RunOutput::error_fields(const PhaseTimes& times) const {
                        "    \"final\": {},\n    \"peak\": {},\n"
                        "    \"time_s\": {:.6f}, \"cost_fraction\": {}}},\n",
                        e.method() == ErrorEstimateChoice::observed ? "observed" : "richardson", e.contact_nodes(),
-                       companions, DiscretizationErrorEstimate::nominal_force_order,
+                       companions, e.force_order(),
                        DiscretizationErrorEstimate::nominal_width_order, at_row(records_.back()), at_row(*peak),
                        estimate_seconds, run_seconds > 0.0 ? fmt::format("{:.4f}", estimate_seconds / run_seconds) : "null");
   }

@@ -9,6 +9,7 @@
 
 #include "indentsim/error.hpp"
 #include "indentsim/mesh.hpp"
+#include "indentsim/punch.hpp"
 #include "indentsim/simulation.hpp"
 #include "indentsim/solver.hpp"
 
@@ -75,7 +76,9 @@ std::optional<std::string> error_estimate_unavailable(const LoadCase& load_case)
 }
 
 DiscretizationErrorEstimate::DiscretizationErrorEstimate(const Simulation& main)
-    : method_(main.load_case().mesh.error_estimate), contact_nodes_(main.load_case().mesh.contact_nodes) {
+    : method_(main.load_case().mesh.error_estimate),
+      force_order_(make_punch(main.load_case().punch)->force_convergence_order()),
+      contact_nodes_(main.load_case().mesh.contact_nodes) {
   if (method_ == ErrorEstimateChoice::off) throw std::invalid_argument("error estimate: mesh.error_estimate is off");
   if (const auto why = error_estimate_unavailable(main.load_case())) throw std::invalid_argument(*why);
   std::vector<int> levels{contact_nodes_ / 2};
@@ -114,7 +117,7 @@ std::optional<DiscretizationErrorEstimate::AtIncrement> DiscretizationErrorEstim
   // The fine-zone spacing is the planned contact width over contact_nodes: h ~ 1 / contact_nodes.
   const double ratio = static_cast<double>(contact_nodes_) / companions_[0].contact_nodes;
   AtIncrement estimate;
-  estimate.force_order = nominal_force_order;
+  estimate.force_order = force_order_;
   if (method_ == ErrorEstimateChoice::observed) {
     const IncrementRecord* quarter = companion_row(1, row);
     if (!quarter) return std::nullopt;
@@ -166,7 +169,8 @@ int plan_contact_nodes_for_target(const LoadCase& load_case, TargetErrorChoice& 
                                   "companion run stopped early or the curve has no force",
                                   pilot_contact_nodes));
   choice.attempts.push_back({"pilot", pilot_contact_nodes, *error});
-  return contact_nodes_for_target(*error, pilot_contact_nodes, choice.target);
+  return contact_nodes_for_target(*error, pilot_contact_nodes, choice.target,
+                                  make_punch(load_case.punch)->force_convergence_order());
 }
 
 int contact_nodes_for_target(double relative_error, int contact_nodes, double target, double order) {
