@@ -107,7 +107,7 @@ void expect_brackets_true_error(const std::string& file, const std::vector<std::
 }  // namespace
 
 // Plane strain and axisymmetry, elastic and both plastic models: the estimate (companion at
-// half the nodes, nominal order 2) is within a factor 2 of the true error.
+// half the nodes, the order force_order_assumed gives) is within a factor 2 of the true error.
 TEST(ErrorEstimate, BracketsTheTrueErrorWithinAFactorTwo) {
   expect_brackets_true_error("hertz_thick_block.toml", {"load.increments=2"}, 10);
   expect_brackets_true_error("axisymmetric/elastic_sphere.toml", {"load.increments=2"}, 10);

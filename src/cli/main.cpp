@@ -30,7 +30,6 @@
 #include "indentsim/interruption.hpp"
 #include "indentsim/io.hpp"
 #include "indentsim/load_case.hpp"
-#include "indentsim/punch.hpp"
 #include "indentsim/run_folder.hpp"
 #include "indentsim/simulation.hpp"
 #include "indentsim/version.hpp"
@@ -279,7 +278,7 @@ int command_run(const std::string& file, const std::vector<std::string>& overrid
     if (!reached || *reached <= target->target) return code;
     target->attempts.push_back({"run", lc.mesh.contact_nodes, *reached});
     lc.mesh.contact_nodes = contact_nodes_for_target(*reached, lc.mesh.contact_nodes, target->target,
-                                                     make_punch(lc.punch)->force_convergence_order());
+                                                     force_order_assumed(lc));
     if (!quiet)
       fmt::print("target error {:.3g} missed (estimate {:.3g}): running once more at contact_nodes = {}\n",
                  target->target, *reached, lc.mesh.contact_nodes);

@@ -77,7 +77,7 @@ std::optional<std::string> error_estimate_unavailable(const LoadCase& load_case)
 
 DiscretizationErrorEstimate::DiscretizationErrorEstimate(const Simulation& main)
     : method_(main.load_case().mesh.error_estimate),
-      force_order_(make_punch(main.load_case().punch)->force_convergence_order()),
+      force_order_(force_order_assumed(main.load_case())),
       contact_nodes_(main.load_case().mesh.contact_nodes) {
   if (method_ == ErrorEstimateChoice::off) throw std::invalid_argument("error estimate: mesh.error_estimate is off");
   if (const auto why = error_estimate_unavailable(main.load_case())) throw std::invalid_argument(*why);
@@ -108,6 +108,12 @@ const IncrementRecord* DiscretizationErrorEstimate::companion_row(std::size_t co
   if (c.step != row.step || std::abs(c.alpha - row.alpha) > 1e-12 * std::max(std::abs(row.alpha), 1e-300))
     return nullptr;
   return &c;
+}
+
+double force_order_assumed(const LoadCase& load_case) {
+  constexpr double plastic_order = 1.5;
+  const double shape_order = make_punch(load_case.punch)->force_convergence_order();
+  return load_case.material.model == MaterialModel::elastic ? shape_order : std::min(shape_order, plastic_order);
 }
 
 std::optional<DiscretizationErrorEstimate::AtIncrement> DiscretizationErrorEstimate::at(
@@ -170,7 +176,7 @@ int plan_contact_nodes_for_target(const LoadCase& load_case, TargetErrorChoice& 
                                   pilot_contact_nodes));
   choice.attempts.push_back({"pilot", pilot_contact_nodes, *error});
   return contact_nodes_for_target(*error, pilot_contact_nodes, choice.target,
-                                  make_punch(load_case.punch)->force_convergence_order());
+                                  force_order_assumed(load_case));
 }
 
 int contact_nodes_for_target(double relative_error, int contact_nodes, double target, double order) {
