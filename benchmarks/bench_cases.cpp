@@ -2,9 +2,11 @@
 // For each size: unknowns, setup time (mesh, assembly, and for plastic cases the pilot run),
 // median wall time per increment, Newton iterations and numeric factorizations per increment,
 // KLU symbolic analyses per run, and the final force.  Each size is run `repeats` times and
-// the medians are reported (this machine is noisy).
+// the medians are reported (this machine is noisy); then the least-squares exponent p of the
+// time per increment ~ DOFs^p over the sizes.
 //
-//   indentsim_bench [repeats] [loadcase ...]     (default: loadcases/elastic.toml, loadcases/paper.toml)
+//   indentsim_bench [repeats] [--nodes 10,20,40] [loadcase ...]
+//                                                (default: loadcases/elastic.toml, loadcases/paper.toml)
 //   indentsim_bench --scaling [loadcase ...]      (default: loadcases/elastic.toml)
 //
 // --scaling: one run per mesh from 1e4 to 1.1e6 unknowns (contact_nodes 20 to 300), 3 increments,
@@ -27,11 +29,28 @@ using namespace indentsim;
 
 using timing::median;
 
-void bench(const std::string& file, int repeats) {
+double fitted_exponent(const std::vector<double>& unknowns, const std::vector<double>& seconds) {
+  // Least-squares slope of log(seconds) against log(unknowns).
+  double mx = 0, my = 0;
+  const auto n = static_cast<double>(unknowns.size());
+  for (std::size_t k = 0; k < unknowns.size(); ++k) {
+    mx += std::log(unknowns[k]) / n;
+    my += std::log(seconds[k]) / n;
+  }
+  double sxy = 0, sxx = 0;
+  for (std::size_t k = 0; k < unknowns.size(); ++k) {
+    sxy += (std::log(unknowns[k]) - mx) * (std::log(seconds[k]) - my);
+    sxx += (std::log(unknowns[k]) - mx) * (std::log(unknowns[k]) - mx);
+  }
+  return sxx > 0 ? sxy / sxx : 0.0;
+}
+
+void bench(const std::string& file, int repeats, const std::vector<int>& sizes) {
   fmt::print("\n{} ({} repeats, medians)\n", file, repeats);
   fmt::print("{:>13} {:>9} {:>8} {:>10} {:>13} {:>10} {:>12} {:>9} {:>12}\n", "contact_nodes", "unknowns", "system",
              "setup_s", "s/increment", "newton/inc", "factor/inc", "symbolic", "P_final");
-  for (int contact_nodes : {10, 20, 40}) {
+  std::vector<double> all_unknowns, all_per_increment;
+  for (int contact_nodes : sizes) {
     std::vector<double> setup, per_increment;
     double newton = 0, factor = 0, force = 0;
     long symbolic = 0;
@@ -63,23 +82,12 @@ void bench(const std::string& file, int repeats) {
     fmt::print("{:>13} {:>9} {:>8} {:>10.3f} {:>13.4f} {:>10.2f} {:>12.2f} {:>9} {:>12.6e}\n", contact_nodes, unknowns,
                system, median(setup), median(per_increment), newton, factor, symbolic, force);
     std::fflush(stdout);
+    all_unknowns.push_back(unknowns);
+    all_per_increment.push_back(median(per_increment));
   }
-}
-
-double fitted_exponent(const std::vector<double>& unknowns, const std::vector<double>& seconds) {
-  // Least-squares slope of log(seconds) against log(unknowns).
-  double mx = 0, my = 0;
-  const auto n = static_cast<double>(unknowns.size());
-  for (std::size_t k = 0; k < unknowns.size(); ++k) {
-    mx += std::log(unknowns[k]) / n;
-    my += std::log(seconds[k]) / n;
-  }
-  double sxy = 0, sxx = 0;
-  for (std::size_t k = 0; k < unknowns.size(); ++k) {
-    sxy += (std::log(unknowns[k]) - mx) * (std::log(seconds[k]) - my);
-    sxx += (std::log(unknowns[k]) - mx) * (std::log(unknowns[k]) - mx);
-  }
-  return sxx > 0 ? sxy / sxx : 0.0;
+  if (all_unknowns.size() >= 2)
+    fmt::print("  time per increment ~ DOFs^{:.2f} (least squares over {} sizes)\n",
+               fitted_exponent(all_unknowns, all_per_increment), all_unknowns.size());
 }
 
 void scaling(const std::string& file) {
@@ -130,11 +138,24 @@ int main(int argc, char** argv) {
   }
   const int repeats = argc > 1 ? std::max(1, std::atoi(argv[1])) : 3;
   std::vector<std::string> files;
-  for (int i = 2; i < argc; ++i) files.emplace_back(argv[i]);
+  std::vector<int> sizes{10, 20, 40};
+  for (int i = 2; i < argc; ++i) {
+    if (std::string(argv[i]) == "--nodes" && i + 1 < argc) {
+      sizes.clear();
+      std::string list = argv[++i];
+      for (std::size_t start = 0; start < list.size();) {
+        const std::size_t comma = std::min(list.find(',', start), list.size());
+        sizes.push_back(std::atoi(list.substr(start, comma - start).c_str()));
+        start = comma + 1;
+      }
+    } else {
+      files.emplace_back(argv[i]);
+    }
+  }
   if (files.empty())
     for (const char* name : {"elastic.toml", "paper.toml"})
       files.push_back(std::string(INDENTSIM_SOURCE_DIR) + "/loadcases/" + name);
   fmt::print("indentsim benchmark\n");
-  for (const auto& f : files) bench(f, repeats);
+  for (const auto& f : files) bench(f, repeats, sizes);
   return 0;
 }

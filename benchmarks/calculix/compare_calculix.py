@@ -3,6 +3,7 @@
 
     /usr/bin/python3 benchmarks/calculix/compare_calculix.py CASE.toml [--contact-nodes 10 20 40]
         [--increments 24] [--repeats 3] [--indentsim build/indentsim] [--ccx ccx] [--keep DIR]
+        [--plot plots/calculix_work_precision.png]
 
 For a plane-strain load case with an elastic material and a cylinder punch (the paper's geometry:
 loadcases/paper.toml with --set material.model=elastic, which this script applies itself), and
@@ -14,7 +15,8 @@ each contact_nodes N:
      so both codes have the same discretization error and "equal error" means "equal mesh";
   3. ccx solves it (one thread, like indentsim) and its force is read from the .dat file.
 Prints P of both (N/m, both halves), their relative difference, the wall times and their ratio,
-and the error of P against the Richardson extrapolation of indentsim's three finest meshes.
+and the error of P against the Richardson extrapolation of indentsim alone on the two finest meshes
+and one twice as fine (--reference-nodes, default twice the largest N), with their observed order.
 
 The deck (ccx 2.20):
   * CPE4 (bilinear, full 2x2 integration -- indentsim's Q1), *SOLID SECTION thickness 1 m;
@@ -181,15 +183,43 @@ def run_ccx(ccx, workdir, job):
     return -2.0 * float(totals[-1][2]), wall  # both halves, compression positive
 
 
+def plot(rows, reference, path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    error = [abs(r["force"] - reference) / reference * 100 for r in rows]
+    fig, ax = plt.subplots(figsize=(6, 4.2))
+    for key, label, marker in (("ccx", "CalculiX 2.20 (CPE4 + GAPUNI)", "s"),
+                               ("on", "indentsim, error estimate on", "o"),
+                               ("off", "indentsim, error estimate off", "^")):
+        ax.loglog([r[key] for r in rows], error, marker=marker, label=label)
+    for r, e in zip(rows, error):
+        ax.annotate(f"N = {r['nodes']}", (r["ccx"], e), textcoords="offset points", xytext=(4, 4), fontsize=8)
+    ax.set_xlabel("wall time of the whole run [s] (one thread each)")
+    ax.set_ylabel("error of the final P [%]")
+    ax.set_title("Paper geometry, elastic, 24 increments: the same mesh, the same P")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    fig.savefig(path.with_suffix(".svg"))
+    print(f"wrote {path}")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("case", type=pathlib.Path)
     ap.add_argument("--contact-nodes", type=int, nargs="+", default=[10, 20, 40])
     ap.add_argument("--increments", type=int, default=24)
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--reference-nodes", type=int, help="indentsim alone on this mesh for the reference "
+                    "(default: twice the largest --contact-nodes)")
     ap.add_argument("--indentsim", type=pathlib.Path, default=pathlib.Path("build/indentsim"))
     ap.add_argument("--ccx", default="ccx")
     ap.add_argument("--keep", type=pathlib.Path, help="keep the runs, decks and results here")
+    ap.add_argument("--plot", type=pathlib.Path, help="draw error against wall time (PNG, and SVG beside it)")
     args = ap.parse_args()
     if shutil.which(args.ccx) is None:
         fail(f"{args.ccx} not found: apt-get install calculix-ccx")
@@ -216,15 +246,23 @@ def main():
                          on=statistics.median(on), ccx=ccx_wall))
         print(f"N = {n}: done", file=sys.stderr, flush=True)
 
+    # The reference: Richardson of indentsim on the two finest meshes and a finer one (the same
+    # refinement ratio), with the order observed from the three.
     reference = None
-    if len(rows) >= 3:  # Richardson of the three finest (contact_nodes doubling)
-        f1, f2, f3 = (r["force"] for r in rows[-3:])
-        ratio = rows[-1]["nodes"] / rows[-2]["nodes"]
-        if (f1 - f2) * (f2 - f3) > 0:
+    if len(rows) >= 2:
+        n1, n2 = rows[-2]["nodes"], rows[-1]["nodes"]
+        n3 = args.reference_nodes or 2 * n2
+        run_indentsim(args.indentsim, args.case, n3, args.increments, work / f"N{n3}_reference",
+                      ["--set", "mesh.error_estimate=off", "--set", "output.fields_every=0"])
+        f1, f2, f3 = rows[-2]["force"], rows[-1]["force"], final_force(work / f"N{n3}_reference")[0]
+        ratio = n2 / n1
+        if (f1 - f2) * (f2 - f3) > 0 and abs(n3 / n2 - ratio) < 1e-9:
             order = math.log(abs(f1 - f2) / abs(f2 - f3)) / math.log(ratio)
             reference = f3 + (f3 - f2) / (ratio ** order - 1.0)
-            print(f"reference P = {reference:.8e} N/m (Richardson of N = {rows[-3]['nodes']}, {rows[-2]['nodes']}, "
-                  f"{rows[-1]['nodes']}; observed order {order:.2f})")
+            print(f"reference P = {reference:.8e} N/m (Richardson of indentsim at N = {n1}, {n2}, {n3}; "
+                  f"observed order {order:.2f})")
+        else:
+            print(f"no reference: P at N = {n1}, {n2}, {n3} is not monotone or the meshes are not one ratio apart")
     print(f"{'N':>4} {'DOFs':>7} {'P indentsim [N/m]':>18} {'P ccx [N/m]':>15} {'rel.diff':>9} {'error':>8} "
           f"{'indentsim [s]':>13} {'+estimate [s]':>13} {'ccx [s]':>8} {'ratio':>6} {'ratio+est':>9}")
     for r in rows:
@@ -232,6 +270,8 @@ def main():
         print(f"{r['nodes']:>4} {r['dofs']:>7} {r['force']:>18.9e} {r['ccx_force']:>15.7e} "
               f"{abs(r['ccx_force'] - r['force']) / r['force']:>9.1e} {error:>8} {r['off']:>13.3f} {r['on']:>13.3f} "
               f"{r['ccx']:>8.2f} {r['ccx'] / r['off']:>6.1f} {r['ccx'] / r['on']:>9.1f}")
+    if args.plot and reference:
+        plot(rows, reference, args.plot)
     (work / "compare_calculix.json").write_text(json.dumps(dict(case=str(args.case), rows=rows, reference=reference),
                                                            indent=1))
     if not args.keep:
