@@ -143,6 +143,9 @@ public:
   int near_field_growths() const { return near_field_growths_; }
   /// How often the near field was grown ahead of the plastic zone (anticipate_plastic_zone).
   int near_field_rebuilds() const { return near_field_rebuilds_; }
+  /// The pilot's plastic zone by depth (empty without a pilot); a resumed run has it from its
+  /// checkpoint.
+  const PlasticZoneGrowth& plastic_zone_growth() const { return plastic_zone_growth_; }
   /// Wall-clock time of this simulation's phases: planning (with the pilot run), model (mesh,
   /// assembly, laws, contact, condensation, KINSOL set-up), stepping (the increments, including a
   /// rebuild when the near field grows).  The driver adds its own (output).

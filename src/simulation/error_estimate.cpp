@@ -50,10 +50,10 @@ CompanionRun run_companion(const Simulation& main, int contact_nodes) {
   companion.contact_nodes = contact_nodes;
   LoadCase lc = main.load_case();
   lc.mesh.contact_nodes = contact_nodes;
-  // The main run's planned contact width; not its pilot's plastic zone, which a resumed run no
-  // longer has: the companion's near field is sized from the width alone (and grows if need be),
-  // so that a resumed run's estimate is the original's bit for bit.
-  const RunPlan plan{plan_mesh(lc, main.plan().contact_half_width_estimate), {}};
+  // The main run's planned contact width and its pilot's plastic zone (a resumed run has it from
+  // its checkpoint, so its estimate is the original's bit for bit): the companion's near field
+  // grows with the zone as the main run's does.
+  const RunPlan plan{plan_mesh(lc, main.plan().contact_half_width_estimate), main.plastic_zone_growth()};
   try {
     Simulation sim(lc, plan);
     sim.run([&](const IncrementRecord& r) { companion.curve.push_back(r); });
