@@ -1,6 +1,6 @@
 #include "indentsim/simulation.hpp"
-#include "indentsim/worker_threads.hpp"
 #include "indentsim/unloading_stiffness.hpp"
+#include "indentsim/worker_threads.hpp"
 
 #include "indentsim/interruption.hpp"
 
@@ -30,9 +30,10 @@ constexpr double min_plausible_modulus = 1e3, max_plausible_modulus = 2e12;  // 
 // chord sqrt(2 R alpha) when the material flows freely.  A coarse pilot run of the same load
 // case (8 elements across the chord, 4 increments) measures the final contact half-width and
 // how far the plastic zone reaches at each of its increments; the real mesh is planned from the
-// first with a 5% margin, the condensed near field from the second, as it grows with the depth.  The pilot sets mesh.contact_half_width itself, so it
-// never runs a pilot of its own, and solves its small mesh whole.  Should it fail, the chord is a
-// safe upper bound and the near field falls back to its default.
+// first with a 5% margin, the condensed near field from the second, as it grows with the depth.
+// The pilot sets mesh.contact_half_width itself, so it never runs a pilot of its own, and solves
+// its small mesh whole.  Should it fail, the chord is a safe upper bound and the near field falls
+// back to its default.
 struct PilotResult {
   double contact_half_width = 0.0;
   PlasticZoneGrowth plastic_zone;
