@@ -131,6 +131,9 @@ struct LoadCase {
 LoadCase read_load_case(const std::filesystem::path& file,
                         const std::vector<std::string>& overrides = {});
 
+/// A TOML basic string holding `s`: how a path or a word is passed through a "key=value" override.
+std::string toml_string(const std::string& s);
+
 /// Parses a load case from TOML text (tests, fuzzing); `source` names it in messages.
 LoadCase parse_load_case(const std::string& toml_text, const std::string& source,
                          const std::vector<std::string>& overrides = {});

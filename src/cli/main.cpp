@@ -30,6 +30,7 @@
 #include "indentsim/interruption.hpp"
 #include "indentsim/io.hpp"
 #include "indentsim/load_case.hpp"
+#include "indentsim/run_driver.hpp"
 #include "indentsim/run_folder.hpp"
 #include "indentsim/simulation.hpp"
 #include "indentsim/version.hpp"
@@ -40,37 +41,34 @@ using namespace indentsim;
 namespace {
 
 constexpr int exit_bad_input = 2;
-constexpr int exit_not_converged = 3;
 constexpr int exit_io_failure = 4;
 
-/// A TOML basic string holding `s`, for passing a path through --set.
-std::string toml_string(const std::string& s) {
-  std::string quoted = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') quoted += '\\';
-    quoted += c;
-  }
-  return quoted + "\"";
-}
-
-/// The progress line on stderr for runs longer than a moment: increment k of N, alpha, P, Newton
-/// iterations, elapsed and remaining time.  Rewritten in place on a terminal; otherwise a line
+/// What a run says, on the terminal: notes on stdout (unless quiet), warnings on stderr, and the
+/// progress line on stderr for runs longer than a moment (increment k of N, alpha, P, Newton
+/// iterations, elapsed and remaining time), rewritten in place on a terminal, otherwise a line
 /// every few seconds.
-class Progress {
+class ConsoleObserver : public RunObserver {
 public:
-  Progress(int increments, std::string force_unit, bool quiet)
-      : increments_(increments), force_unit_(std::move(force_unit)), quiet_(quiet), terminal_(isatty(fileno(stderr)) != 0), start_(clock::now()) {}
+  explicit ConsoleObserver(bool quiet) : quiet_(quiet), terminal_(isatty(fileno(stderr)) != 0), start_(clock::now()) {}
 
-  void update(const IncrementRecord& r) {
-    if (quiet_ || r.step == 0) return;
+  void note(const std::string& line) override {
+    if (!quiet_) fmt::print("{}\n", line);
+  }
+  void warning(const std::string& text) override {
+    clear_line();
+    fmt::print(stderr, "warning: {}\n", text);
+  }
+  void increment(const IncrementRecord& r, int planned, const std::string& force_unit) override {
+    if (quiet_) return;
     const double elapsed = seconds_since(start_);
     if (elapsed < 1.0) return;
-    if (!terminal_ && seconds_since(last_) < 5.0 && r.step < increments_) return;
+    if (!terminal_ && seconds_since(last_) < 5.0 && r.step < planned) return;
     last_ = clock::now();
-    const double remaining = elapsed / r.step * std::max(0, increments_ - r.step);
+    const double remaining = elapsed / r.step * std::max(0, planned - r.step);
     const std::string line = fmt::format("increment {}/{}  alpha = {:.4g} m  P = {:.5g} {}  Newton {}  elapsed {:.1f} s  "
                                          "remaining ~{:.1f} s",
-                                         r.step, increments_, r.alpha, r.force, force_unit_, r.newton_iterations, elapsed, remaining);
+                                         r.step, planned, r.alpha, r.force, force_unit, r.newton_iterations, elapsed,
+                                         remaining);
     if (terminal_) {
       fmt::print(stderr, "\r{}\033[K", line);
       shown_ = true;
@@ -79,11 +77,7 @@ public:
     }
     std::fflush(stderr);
   }
-  void clear_line() {
-    if (shown_) fmt::print(stderr, "\r\033[K");
-    shown_ = false;
-  }
-  void finish() {
+  void increments_ended() override {
     if (shown_) fmt::print(stderr, "\n");
     shown_ = false;
   }
@@ -91,31 +85,24 @@ public:
 private:
   using clock = std::chrono::steady_clock;
   static double seconds_since(clock::time_point t) { return std::chrono::duration<double>(clock::now() - t).count(); }
-  int increments_;
-  std::string force_unit_;
+  void clear_line() {
+    if (shown_) fmt::print(stderr, "\r\033[K");
+    shown_ = false;
+  }
   bool quiet_, terminal_, shown_ = false;
   clock::time_point start_, last_{};
 };
 
-void describe_near_field(const Simulation& sim) {
-  const NearField& near = sim.near_field();
-  if (!near.condensed) {
-    fmt::print("Newton systems: the whole mesh ({} unknowns)\n", sim.system_unknowns());
-    return;
-  }
-  fmt::print("Newton systems: {} unknowns of the near field ({} contact candidates, {} x {} elements that may "
-             "yield); the elastic far field is condensed\n",
-             sim.system_unknowns(), near.contact_nodes, near.elements_x, near.elements_y);
-}
-
-void print_mesh(const Simulation& sim) {
-  const auto& p = sim.plan();
-  fmt::print("mesh: {} x {} nodes, {} unknowns; fine zone {:.4g} m x {:.4g} m at spacing {:.4g} m "
-             "(estimated final contact half-width {:.4g} m), growth {:.3f}; linear solver {}\n",
-             p.nodes_x, p.nodes_y, sim.mesh().equations(), p.fine_width, p.fine_depth, p.fine_spacing,
-             p.contact_half_width_estimate, p.growth,
-             sim.linear_solver() == LinearSolverKind::cholmod ? "CHOLMOD" : "KLU");
-  describe_near_field(sim);
+/// The end of a run on the terminal and its exit status: the reason it did not converge, or how
+/// to resume it, on stderr (named by the case or checkpoint run); the curve's path otherwise.
+int report_end(const RunReport& report, bool quiet) {
+  const std::string& label = report.load_case.source;
+  if (report.status == RunStatus::not_converged) fmt::print(stderr, "{}: {}\n", label, report.message);
+  if (report.status == RunStatus::stopped)
+    fmt::print(stderr, "{}: stopped by signal {} after increment {}; resume with: indentsim resume {}\n", label,
+               report.stop_signal, report.last_step, report.resume_checkpoint.string());
+  if (!quiet) fmt::print("P-alpha curve: {}\n", report.curve_file.string());
+  return report.exit_status();
 }
 
 int command_check(const std::string& file, const std::vector<std::string>& overrides) {
@@ -131,158 +118,12 @@ int command_check(const std::string& file, const std::vector<std::string>& overr
 
 extern "C" void on_stop_signal(int signal) { request_interruption(signal); }
 
-/// Steps the simulation to the end of its load path, writing outputs and checkpoints; on
-/// SIGINT/SIGTERM it checkpoints after the increment in progress and stops cleanly.  Ends the
-/// folder's summary.json with the run's status, "failed" with the message on an I/O error.
-int drive(Simulation& sim, RunOutput& output, const std::string& label, bool quiet) {
-  const LoadCase& lc = sim.load_case();
-  const fs::path checkpoint_dir = fs::path(lc.output.dir) / "checkpoints";
-  const CheckpointSchedule schedule = CheckpointSchedule::of(lc);
-  Progress progress(static_cast<int>(plan_increments(lc.load).size()) - 1,
-                    make_kinematics(lc.geometry.kind)->force_unit(), quiet);
-  std::size_t warnings_shown = 0;
-  const auto show_warnings = [&] {
-    for (; warnings_shown < sim.warnings().size(); ++warnings_shown) {
-      progress.clear_line();
-      fmt::print(stderr, "warning: {}\n", sim.warnings()[warnings_shown]);
-    }
-  };
-  int last_checkpoint = output.records().empty() ? -1 : output.records().back().step;
-  const auto checkpoint = [&] {
-    last_checkpoint = output.records().back().step;
-    return save_checkpoint(checkpoint_dir, make_checkpoint(sim, output.records(), output.free_surface_depths()),
-                           schedule);
-  };
-  try {
-    int exit_code = 0;
-    RunStatus status = RunStatus::finished;
-    std::string message;
-    try {
-      sim.run([&](const IncrementRecord& r) {
-        {
-          const PhaseTimes::Scope timing = sim.times().measure("output");
-          output.increment(sim, r);
-          inject_fault("increment");
-          if (schedule.due(r.step)) checkpoint();
-        }
-        show_warnings();
-        progress.update(r);
-        if (const int signal = interruption_requested()) throw Interrupted(signal);
-      });
-      if (lc.output.checkpoint_every > 0 && last_checkpoint != output.records().back().step) {
-        const PhaseTimes::Scope timing = sim.times().measure("output");
-        checkpoint();
-      }
-    } catch (const SolverError& e) {
-      progress.clear_line();
-      fmt::print(stderr, "{}: {}\n", label, e.what());
-      exit_code = exit_not_converged;
-      status = RunStatus::not_converged;
-      message = e.what();
-    } catch (const Interrupted& i) {
-      progress.clear_line();
-      const fs::path file = checkpoint();
-      fmt::print(stderr, "{}: stopped by signal {} after increment {}; resume with: indentsim resume {}\n", label,
-                 i.signal(), output.records().back().step, file.string());
-      exit_code = 128 + i.signal();
-      status = RunStatus::stopped;
-      message = fmt::format("stopped by signal {}; resume with: indentsim resume {}", i.signal(), file.string());
-    }
-    progress.finish();
-    {
-      const PhaseTimes::Scope timing = sim.times().measure("output");
-      output.finish(sim, status, message, sim.times());
-    }
-    show_warnings();
-    if (!quiet) {
-      if (sim.near_field_growths() > 0 || sim.near_field_rebuilds() > 0) {
-        fmt::print("the near field grew {} time(s) ahead of the plastic zone and {} time(s) after an increment "
-                   "left it; ",
-                   sim.near_field_rebuilds(), sim.near_field_growths());
-        describe_near_field(sim);
-      }
-      fmt::print("largest condition estimate of a Newton matrix: {:.3g} ({})\n", sim.largest_condition_estimate(),
-                 sim.linear_solver() == LinearSolverKind::cholmod ? "CHOLMOD 1/rcond" : "KLU condest");
-      std::string phases;
-      for (const auto& [name, seconds] : sim.times().phases()) phases += fmt::format("{}{} {:.3g} s", phases.empty() ? "" : ", ", name, seconds);
-      fmt::print("time: {}\n", phases);
-      fmt::print("P-alpha curve: {}\n", output.curve_path().string());
-    }
-    return exit_code;
-  } catch (const IoError& e) {
-    progress.clear_line();
-    output.fail(e.what());
-    fmt::print(stderr, "error: {}\n", e.what());
-    return exit_io_failure;
-  } catch (const std::filesystem::filesystem_error& e) {
-    progress.clear_line();
-    output.fail(e.what());
-    fmt::print(stderr, "error: {}\n", e.what());
-    return exit_io_failure;
-  } catch (const std::exception& e) {
-    progress.clear_line();
-    output.fail(e.what());
-    throw;
-  }
-}
-
-/// mesh.error_estimate: the companion runs of `sim` (before anything is written), timed as the
-/// run's "error estimate" phase; null when it is off.
-std::unique_ptr<DiscretizationErrorEstimate> estimate_error(Simulation& sim, bool quiet) {
-  const LoadCase& lc = sim.load_case();
-  if (lc.mesh.error_estimate == ErrorEstimateChoice::off) return nullptr;
-  if (const auto why = error_estimate_unavailable(lc)) {
-    fmt::print(stderr, "warning: {}\n", *why);
-    return nullptr;
-  }
-  if (!quiet)
-    fmt::print("error estimate: companion run{} at contact_nodes = {}\n",
-               lc.mesh.error_estimate == ErrorEstimateChoice::observed ? "s" : "",
-               lc.mesh.error_estimate == ErrorEstimateChoice::observed
-                   ? fmt::format("{} and {}", lc.mesh.contact_nodes / 2, lc.mesh.contact_nodes / 4)
-                   : std::to_string(lc.mesh.contact_nodes / 2));
-  const PhaseTimes::Scope timing = sim.times().measure("error estimate");
-  auto estimate = std::make_unique<DiscretizationErrorEstimate>(sim);
-  for (const auto& warning : estimate->warnings()) fmt::print(stderr, "warning: {}\n", warning);
-  return estimate;
-}
-
 int command_run(const std::string& file, const std::vector<std::string>& overrides, const std::string& out,
                 bool quiet) {
   std::vector<std::string> all = overrides;
   if (!out.empty()) all.push_back("output.dir=" + toml_string(out));
-  LoadCase lc = read_load_case(file, all);
-  RunFolder folder(lc.output.dir, lc.source);  // one run per folder: locked before anything is solved
-  // mesh.target_error: a pilot chooses contact_nodes; the run checks its own estimate and is
-  // refined once if it missed.  The case as run (case.toml, checkpoints) has the chosen mesh.
-  std::optional<TargetErrorChoice> target;
-  if (lc.mesh.target_error) {
-    target.emplace();
-    lc.mesh.contact_nodes = plan_contact_nodes_for_target(lc, *target);
-    lc.mesh.target_error.reset();
-    if (!quiet)
-      fmt::print("target error {:.3g}: the pilot (contact_nodes = {}) estimates {:.3g}; running contact_nodes = {}\n",
-                 target->target, target->attempts.back().contact_nodes, target->attempts.back().relative_error,
-                 lc.mesh.contact_nodes);
-  }
-  for (;;) {
-    Simulation sim(lc);  // validates the mesh size before anything is written
-    if (!quiet) print_mesh(sim);
-    const auto estimate = estimate_error(sim, quiet);
-    folder.clear_earlier_run();
-    RunOutput output(folder.dir(), lc, estimate.get());
-    if (target) output.set_target_choice(*target);
-    const int code = drive(sim, output, file, quiet);
-    if (!target || code != 0 || target->attempts.size() > 1) return code;
-    const std::optional<double> reached = relative_force_error(*estimate, output.records());
-    if (!reached || *reached <= target->target) return code;
-    target->attempts.push_back({"run", lc.mesh.contact_nodes, *reached});
-    lc.mesh.contact_nodes = contact_nodes_for_target(*reached, lc.mesh.contact_nodes, target->target,
-                                                     force_order_assumed(lc));
-    if (!quiet)
-      fmt::print("target error {:.3g} missed (estimate {:.3g}): running once more at contact_nodes = {}\n",
-                 target->target, *reached, lc.mesh.contact_nodes);
-  }
+  ConsoleObserver console(quiet);
+  return report_end(run_load_case(read_load_case(file, all), console), quiet);
 }
 
 int command_list_checkpoints(const std::string& argument) {
@@ -302,42 +143,9 @@ int command_list_checkpoints(const std::string& argument) {
 
 int command_resume(const std::string& argument, const std::vector<std::string>& overrides, const std::string& out,
                    bool quiet) {
-  const fs::path file = choose_checkpoint(argument);
-  const Checkpoint checkpoint = read_checkpoint(file);
-  std::vector<std::string> all = overrides;
-  if (!out.empty()) all.push_back("output.dir=" + toml_string(out));
-  ResumedRun run = resume_from(checkpoint, file.string(), all);  // everything checked before writing
-  const LoadCase stored = parse_load_case(checkpoint.load_case_toml, file.string());
-  const fs::path dir = run.load_case.output.dir;
-  std::error_code ec;
-  const bool in_place = fs::equivalent(dir, stored.output.dir, ec);
-  if (in_place) {
-    // Continuing in the run's own folder is for a plain continuation only: a branch (another load
-    // path) must never overwrite the run it branches from.
-    if (!same_run(stored, run.load_case))
-      throw InputError(file.string(), "--out",
-                       fmt::format("a branch (another load path) is a new run: give it its own folder with --out; "
-                                   "\"{}\" is left as it is",
-                                   dir.string()));
-    if (fs::is_regular_file(dir / "case.toml", ec)) {
-      const LoadCase folder_case = read_load_case(dir / "case.toml");
-      if (!same_run(folder_case, run.load_case))
-        throw InputError(file.string(), "--out",
-                         fmt::format("\"{}\" now holds another run; give the continuation its own folder with --out",
-                                     dir.string()));
-    }
-  }
-  RunFolder folder(dir, file.string());
-  const int step = checkpoint.curve.back().step;
-  if (!quiet) fmt::print("resuming {} after increment {} (alpha = {:.6g} m)\n", file.string(), step, checkpoint.state.alpha);
-  // The companions are run again (they are cheap and not checkpointed), before anything is written.
-  const auto estimate = estimate_error(*run.simulation, quiet);
-  folder.clear_earlier_run(in_place ? std::optional<int>(step) : std::nullopt);
-  RunOutput output(folder.dir(), run.load_case, estimate.get(), checkpoint.curve, checkpoint.free_surface_depths);
-  output.resumed(*run.simulation);
-  return drive(*run.simulation, output, file.string(), quiet);
+  ConsoleObserver console(quiet);
+  return report_end(resume_run(argument, overrides, out, console), quiet);
 }
-
 
 /// The figure script beside this executable (installed with it by CMake).
 fs::path figure_script(const std::string& for_what) {

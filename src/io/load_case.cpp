@@ -905,6 +905,15 @@ void validate(const LoadCase& lc) {
     fail("solver.max_cutbacks", fmt::format("must lie in [0, 60] (got {})", lc.solver.max_cutbacks));
 }
 
+std::string toml_string(const std::string& s) {
+  std::string quoted = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') quoted += '\\';
+    quoted += c;
+  }
+  return quoted + "\"";
+}
+
 std::string to_toml(const LoadCase& lc) {
   std::string t = fmt::format("# The load case as run (from {}), every key explicit.\n# Written by {}.\n",
                               printable(lc.source, 400), version_line());
