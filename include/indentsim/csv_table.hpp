@@ -27,4 +27,8 @@ std::string trim_csv_field(const std::string& text);
 /// A field as a finite number (surrounding blanks allowed); false for text, NaN or infinity.
 bool parse_csv_number(const std::string& text, double& value);
 
+/// `text` as one field of a comma-separated line: as it is, or quoted (RFC 4180, by libcsv's
+/// csv_write) when it holds a comma, a quote or a line end.
+std::string csv_field(const std::string& text);
+
 }  // namespace indentsim

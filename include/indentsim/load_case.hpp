@@ -131,6 +131,8 @@ struct LoadCase {
 LoadCase read_load_case(const std::filesystem::path& file,
                         const std::vector<std::string>& overrides = {});
 
+/// A double as TOML text: the shortest form that reads back to the same double, always a float.
+std::string toml_number(double value);
 /// A TOML basic string holding `s`: how a path or a word is passed through a "key=value" override.
 std::string toml_string(const std::string& s);
 

@@ -14,6 +14,7 @@
 
 #include "indentsim/io.hpp"
 #include "indentsim/load_case.hpp"
+#include "indentsim/load_stepping.hpp"
 #include "indentsim/simulation.hpp"
 
 namespace indentsim {
@@ -44,6 +45,7 @@ struct RunReport {
   std::filesystem::path dir;                ///< the run folder
   std::filesystem::path curve_file;         ///< dir / curve.csv
   LoadCase load_case;                       ///< as run (mesh.target_error: the mesh it chose)
+  std::vector<IncrementRecord> curve;       ///< every converged increment, as curve.csv has them
   double wall_seconds = 0.0;
 
   /// The CLI's exit status: 0 finished, 3 not converged, 128 + signal when stopped.

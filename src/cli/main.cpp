@@ -33,6 +33,9 @@
 #include "indentsim/run_driver.hpp"
 #include "indentsim/run_folder.hpp"
 #include "indentsim/simulation.hpp"
+#include "indentsim/slurm_array.hpp"
+#include "indentsim/sweep.hpp"
+#include "indentsim/sweep_results.hpp"
 #include "indentsim/version.hpp"
 
 namespace fs = std::filesystem;
@@ -264,6 +267,99 @@ int command_fit(FitCommandLine cl, bool quiet, bool plot) {
   return 0;
 }
 
+struct SweepOptions {
+  std::string shard;
+  bool slurm = false, collect = false, list = false;
+  int shards = 0;
+};
+
+/// `indentsim sweep SWEEP.toml`: the sweep expanded and validated (exit 2 naming the key, nothing
+/// started), its manifest written; then one of: every run in this process and the table (the
+/// default), one shard (--shard i/N), the Slurm array's script (--slurm), the table of what is
+/// done (--collect), or the runs listed (--list).  Runs with a result are never run again.
+int command_sweep(const std::string& file, const SweepOptions& o, bool quiet) {
+  const bool sharded = !o.shard.empty();
+  const auto [i, n] = sharded ? parse_shard(o.shard) : std::pair{1, 1};
+  const SweepManifest manifest = expand_sweep(read_sweep_definition(file));
+  const SweepResults results(manifest.definition.out);
+  if (o.list) {
+    for (const SweepRun& r : manifest.runs) {
+      std::string values;
+      for (std::size_t j = 0; j < manifest.keys.size(); ++j) values += fmt::format("  {} = {}", manifest.keys[j], r.values[j]);
+      fmt::print("{:>6} {} {}{}\n", r.index + 1, r.hash, results.complete(r.hash) ? "done   " : "pending", values);
+    }
+    fmt::print("{}: {} runs\n", file, manifest.runs.size());
+    return 0;
+  }
+  results.write_manifest(manifest);
+  if (o.collect) {
+    const SweepTally t = results.collect(manifest);
+    fmt::print("{} runs: {} finished, {} not converged, {} failed, {} pending\ntable: {}\n", t.runs, t.finished,
+               t.not_converged, t.failed, t.pending, results.table_path().string());
+    return 0;
+  }
+  if (o.slurm) {
+    const int shards = o.shards > 0 ? std::min<int>(o.shards, static_cast<int>(manifest.runs.size()))
+                                    : std::min<int>(100, static_cast<int>(manifest.runs.size()));
+    std::error_code ec;
+    const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+    const fs::path script = manifest.definition.out / "sweep.sbatch";
+    fs::create_directories(manifest.definition.out / "slurm");
+    write_file_atomically(script, slurm_array_script({ec ? fs::path("indentsim") : self, fs::current_path(), file,
+                                                      manifest.definition.out, shards}));
+    fs::permissions(script, fs::perms::owner_exec | fs::perms::group_exec, fs::perm_options::add);
+    fmt::print("{} runs in {} array tasks: sbatch {}\nthen: indentsim sweep {} --collect\n", manifest.runs.size(), shards,
+               script.string(), file);
+    return 0;
+  }
+  const std::vector<const SweepRun*> runs = shard_runs(manifest, i, n);
+  const bool terminal = isatty(fileno(stderr)) != 0;
+  const auto start = std::chrono::steady_clock::now();
+  auto last_line = start;
+  int done = 0, skipped = 0, failed = 0, solved = 0;
+  try {
+    for (const SweepRun* run : runs) {
+      if (results.complete(run->hash)) {
+        ++skipped;
+      } else {
+        if (const int signal = interruption_requested()) throw Interrupted(signal);
+        const SweepRunResult r = results.run(*run, manifest.definition.keep);
+        ++solved;
+        if (r.status != "finished") {
+          ++failed;
+          if (terminal && !quiet) fmt::print(stderr, "\r\033[K");
+          fmt::print(stderr, "run {} ({}): {}: {}\n", run->index + 1, run->hash, r.status, r.message);
+        }
+      }
+      ++done;
+      const auto now = std::chrono::steady_clock::now();
+      if (!quiet && (terminal || now - last_line > std::chrono::seconds(5) || done == static_cast<int>(runs.size()))) {
+        last_line = now;
+        const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        const double remaining = solved > 0 ? elapsed / solved * static_cast<double>(runs.size() - done) : 0.0;
+        fmt::print(stderr, "{}sweep{}: {}/{} runs ({} already done, {} not finished)  elapsed {:.1f} s  remaining ~{:.0f} s{}",
+                   terminal ? "\r\033[K" : "", sharded ? fmt::format(" shard {}/{}", i, n) : "", done, runs.size(), skipped,
+                   failed, elapsed, remaining, terminal ? "" : "\n");
+        std::fflush(stderr);
+      }
+    }
+  } catch (const Interrupted& e) {
+    if (!quiet && terminal) fmt::print(stderr, "\n");
+    fmt::print(stderr, "sweep stopped by signal {}: {} of {} runs have results; the same command finishes the rest\n",
+               e.signal(), done, runs.size());
+    return 128 + e.signal();
+  }
+  if (!quiet && terminal) fmt::print(stderr, "\n");
+  if (sharded) {
+    fmt::print("shard {}/{}: {} runs ({} solved now, {} had results)\n", i, n, runs.size(), solved, skipped);
+    return 0;
+  }
+  const SweepTally t = results.collect(manifest);
+  fmt::print("{} runs: {} finished, {} not converged, {} failed\ntable: {}\n", t.runs, t.finished, t.not_converged,
+             t.failed, results.table_path().string());
+  return 0;
+}
+
 int command_keys(bool markdown) {
   if (markdown) {
     fmt::print("{}", keys_markdown());
@@ -355,6 +451,23 @@ int main(int argc, char** argv) {
   fit->add_flag("--no-plot", no_plot, "write no figure");
   fit->add_flag("--quiet,-q", quiet, "no progress line");
 
+  SweepOptions sweep_options;
+  CLI::App* sweep = app.add_subcommand(
+      "sweep", "a parameter sweep: every run of SWEEP.toml (or one shard of them, or a Slurm job array), each result "
+               "kept under its case's hash; the table OUT/results.csv");
+  sweep->add_option("sweep", file, "sweep file (TOML: [sweep] base, out, design; [set]; [vary])")->required();
+  CLI::Option* shard_option = sweep->add_option("--shard", sweep_options.shard, "run only shard i of N (i/N): runs i, i+N, ...");
+  CLI::Option* slurm_option = sweep->add_flag("--slurm", sweep_options.slurm, "write OUT/sweep.sbatch, a job array of shards");
+  sweep->add_option("--shards", sweep_options.shards, "--slurm: the number of array tasks (default: runs, at most 100)")
+      ->check(CLI::Range(1, 100000))
+      ->needs(slurm_option);
+  CLI::Option* collect_option = sweep->add_flag("--collect", sweep_options.collect, "write the table of the runs done so far");
+  CLI::Option* list_option = sweep->add_flag("--list", sweep_options.list, "list the runs (hash, values, done) and exit");
+  shard_option->excludes(slurm_option)->excludes(collect_option)->excludes(list_option);
+  slurm_option->excludes(collect_option)->excludes(list_option);
+  collect_option->excludes(list_option);
+  sweep->add_flag("--quiet,-q", quiet, "no progress line");
+
   bool markdown = false;
   CLI::App* keys = app.add_subcommand("keys", "list every load-case key: type, default, accepted values, unit, meaning");
   keys->add_flag("--markdown", markdown, "as the README's Markdown table");
@@ -400,6 +513,7 @@ int main(int argc, char** argv) {
     if (analyze->parsed()) return command_analyze(file, overrides, analyze_options);
     if (fit->parsed()) return command_fit(fit_options, quiet, !no_plot);
     if (run->parsed()) return command_run(file, overrides, out, quiet);
+    if (sweep->parsed()) return command_sweep(file, sweep_options, quiet);
     if (resume->parsed()) return list ? command_list_checkpoints(file) : command_resume(file, overrides, out, quiet);
     return command_check(file, overrides);
   } catch (const InputError& e) {

@@ -88,4 +88,11 @@ CsvTable read_csv_table(const std::filesystem::path& file, std::size_t max_bytes
   return table;
 }
 
+std::string csv_field(const std::string& text) {
+  if (text.find_first_of(",\"\r\n") == std::string::npos) return text;
+  std::string quoted(text.size() * 2 + 2, '\0');  // csv_write's worst case: every character a quote
+  quoted.resize(csv_write(quoted.data(), quoted.size(), text.data(), text.size()));
+  return quoted;
+}
+
 }  // namespace indentsim

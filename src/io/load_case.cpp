@@ -114,13 +114,6 @@ std::string join(const std::vector<std::string>& words) {
   return out;
 }
 
-/// A double as TOML text: the shortest form that reads back to the same double, always a float.
-std::string toml_number(double value) {
-  std::string text = fmt::format("{}", value);
-  if (text.find_first_of(".eEn") == std::string::npos) text += ".0";  // "15" would read as an integer
-  return text;
-}
-
 std::string toml_numbers(const std::vector<double>& values) {
   std::string s = "[";
   for (std::size_t i = 0; i < values.size(); ++i) s += (i ? ", " : "") + toml_number(values[i]);
@@ -903,6 +896,12 @@ void validate(const LoadCase& lc) {
     fail("solver.max_newton", fmt::format("must lie in [1, 1000] (got {})", lc.solver.max_newton));
   if (lc.solver.max_cutbacks < 0 || lc.solver.max_cutbacks > 60)
     fail("solver.max_cutbacks", fmt::format("must lie in [0, 60] (got {})", lc.solver.max_cutbacks));
+}
+
+std::string toml_number(double value) {
+  std::string text = fmt::format("{}", value);
+  if (text.find_first_of(".eEn") == std::string::npos) text += ".0";  // "15" would read as an integer
+  return text;
 }
 
 std::string toml_string(const std::string& s) {

@@ -132,7 +132,8 @@ RunReport drive(Simulation& sim, RunOutput& output, RunObserver& observer) {
     output.fail(e.what());
     throw;
   }
-  report.last_step = output.records().empty() ? 0 : output.records().back().step;
+  report.curve = output.records();
+  report.last_step = report.curve.empty() ? 0 : report.curve.back().step;
   if (sim.near_field_growths() > 0 || sim.near_field_rebuilds() > 0)
     observer.note(fmt::format("the near field grew {} time(s) ahead of the plastic zone and {} time(s) after an "
                               "increment left it; {}",
