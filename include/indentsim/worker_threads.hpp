@@ -7,7 +7,7 @@
 // 0.37 s elastic run for a wall-time gain within the noise, and with two runs side by side (a
 // sweep's two workers) each run's spinning threads steal the other's core.  So indentsim asks
 // both for one thread, unless the user's environment sets OPENBLAS_NUM_THREADS or OMP_NUM_THREADS
-// (then theirs is kept).  The calls are looked up at run time: a build against another BLAS has
+// (then theirs is applied, whenever it was set: a Python host may set it after loading OpenBLAS).  The calls are looked up at run time: a build against another BLAS has
 // nothing to set.
 namespace indentsim {
 

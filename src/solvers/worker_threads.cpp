@@ -14,17 +14,24 @@ Function find(const char* name) {
   return reinterpret_cast<Function>(dlsym(RTLD_DEFAULT, name));
 }
 
+/// The thread count an environment variable asks for; 0 when unset or not a positive number.
+int asked(const char* variable) {
+  const char* text = std::getenv(variable);
+  const int n = text ? std::atoi(text) : 0;
+  return n > 0 ? n : 0;
+}
+
+// The environment's count is applied explicitly, not only left to the library: a library reads
+// its variable once, when it is loaded, and a host process (Python with NumPy, a Dask worker)
+// may have loaded it before setting the variable.  The BLAS thread count changes the rounding of
+// CHOLMOD's supernodal updates, so it must be what the run reports.
 int apply_policy() {
-  int blas_threads = 0;
-  if (const char* asked = std::getenv("OPENBLAS_NUM_THREADS")) {
-    blas_threads = std::atoi(asked);
-  } else if (auto set = find<void (*)(int)>("openblas_set_num_threads")) {
-    set(1);
-    blas_threads = 1;
-  }
-  if (!std::getenv("OMP_NUM_THREADS"))
-    if (auto set = find<void (*)(int)>("omp_set_num_threads")) set(1);
-  return blas_threads;
+  const int blas_threads = asked("OPENBLAS_NUM_THREADS") ? asked("OPENBLAS_NUM_THREADS") : 1;
+  const auto set_blas = find<void (*)(int)>("openblas_set_num_threads");
+  if (set_blas) set_blas(blas_threads);
+  if (const auto set_omp = find<void (*)(int)>("omp_set_num_threads"))
+    set_omp(asked("OMP_NUM_THREADS") ? asked("OMP_NUM_THREADS") : 1);
+  return set_blas || asked("OPENBLAS_NUM_THREADS") ? blas_threads : 0;
 }
 
 }  // namespace
