@@ -52,6 +52,22 @@ CurveAnalysis analyze_run_curve(const std::filesystem::path& path, const std::ve
 /// Analyses a measured curve with the setup's columns, units and indenter.
 CurveAnalysis analyze_measured_curve(const std::filesystem::path& csv, const AnalysisSetup& setup);
 
+/// How a measured curve is read (`indentsim analyze`'s flags): the indenter file and the
+/// columns and units, each "" when not given.
+struct MeasuredCurveOptions {
+  std::string indenter_file, depth_column, force_column, depth_unit, force_unit;
+  bool given() const {
+    return !indenter_file.empty() || !depth_column.empty() || !force_column.empty() || !depth_unit.empty() ||
+           !force_unit.empty();
+  }
+};
+
+/// `indentsim analyze CURVE`: a run's folder (or its curve.csv; only analysis.* overrides apply,
+/// and `measured` must be empty) or a measured CSV read as `measured` says.  Throws InputError
+/// naming the file and the key for anything that cannot be analysed.
+CurveAnalysis analyze_curve(const std::filesystem::path& curve, std::vector<std::string> overrides,
+                            const MeasuredCurveOptions& measured);
+
 /// analysis.json: the inputs, the units (stated once), the curve in SI and every branch.
 nlohmann::ordered_json analysis_json(const CurveAnalysis& analysis);
 

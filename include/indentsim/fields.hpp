@@ -24,6 +24,10 @@ struct NodalStresses {
 };
 NodalStresses average_to_nodes(const Mesh& mesh, const BulkModel& bulk);
 
+/// The displacement (u, v) of node `node` from the equation-numbered solution `u` (a fixed
+/// component is 0).
+std::array<double, 2> nodal_displacement(const Mesh& mesh, const double* u, int node);
+
 /// Which state a table or a VTU shows: the increment and its depth (columns `step`, `alpha` of
 /// layers.csv and profiles.csv; field data of a VTU).
 struct FieldFrame {

@@ -59,4 +59,8 @@ nlohmann::json fit_json(const FitProblem& problem, const FitResult& result);
 /// DIR/fit_curves.csv: data set, abscissa, data, model, residual (SI), for the figure.
 std::string fit_curves_csv(const FitProblem& problem, const FitResult& result);
 
+/// Writes a fit's files into `dir` (created if needed), each atomically: fit.json,
+/// fit_curves.csv and fitted_case.toml (fitted_case_K.toml for the K-th data set beyond the first).
+void write_fit_results(const std::filesystem::path& dir, const FitProblem& problem, const FitResult& result);
+
 }  // namespace indentsim

@@ -31,6 +31,9 @@ public:
   virtual void increment(const IncrementRecord& /*record*/, int /*planned*/, const std::string& /*force_unit*/) {}
   /// The increments are over, however they ended (a progress line is closed here).
   virtual void increments_ended() {}
+  /// The last converged state, after the run's files are written (the Python module copies its
+  /// fields here).
+  virtual void final_state(const Simulation& /*simulation*/) {}
 };
 
 /// How a run ended.  Input errors never get this far (InputError is thrown before anything is

@@ -136,6 +136,25 @@ CurveAnalysis analyze_run_curve(const fs::path& path, const std::vector<std::str
   return c;
 }
 
+CurveAnalysis analyze_curve(const fs::path& curve, std::vector<std::string> overrides,
+                            const MeasuredCurveOptions& o) {
+  if (is_run_output(curve)) {
+    if (o.given())
+      throw InputError(curve.string(), "--indenter",
+                       "is a run's output: its indenter and columns are the run's own (only --set analysis.* applies)");
+    return analyze_run_curve(curve, overrides);
+  }
+  std::error_code ec;
+  if (!fs::is_regular_file(curve, ec))
+    throw InputError(curve.string(), "curve", "is neither a run's output folder nor a CSV file of a load-depth curve");
+  for (const auto& [key, value] : {std::pair{"curve.depth_column", o.depth_column}, {"curve.force_column", o.force_column},
+                                   {"curve.depth_unit", o.depth_unit}, {"curve.force_unit", o.force_unit}})
+    if (!value.empty()) overrides.push_back(std::string(key) + "=" + toml_string(value));
+  const AnalysisSetup setup = read_analysis_setup(
+      o.indenter_file.empty() ? std::nullopt : std::optional<fs::path>(o.indenter_file), overrides);
+  return analyze_measured_curve(curve, setup);
+}
+
 CurveAnalysis analyze_measured_curve(const fs::path& csv, const AnalysisSetup& setup) {
   const LoadDepthCurve curve = read_curve_csv(csv, setup.columns);
   CurveAnalysis c;

@@ -171,7 +171,7 @@ fs::path figure_script(const std::string& for_what) {
   argv.push_back(nullptr);
   std::fflush(stdout);
   ::execvp(argv[0], argv.data());
-  throw InputError(for_what, "plot", fmt::format("cannot run {}: {}", python, std::strerror(errno)));
+  throw InputError(for_what, "python3", fmt::format("cannot run {}: {}", python, std::strerror(errno)));
 }
 
 /// `indentsim plot DIR [--step N]`: the figure script beside this executable, run by Debian's
@@ -187,40 +187,17 @@ int command_plot(const std::string& dir, const std::optional<int>& step) {
   exec_python(args, dir);
 }
 
-struct AnalyzeOptions {
-  std::string indenter_file, out, depth_column, force_column, depth_unit, force_unit;
-  bool plot = false;
-};
-
 /// `indentsim analyze CURVE`: Oliver-Pharr on every unloading branch of a run's curve (its folder
 /// or curve.csv) or of a measured CSV; prints the results and writes analysis.json (and with
 /// --plot its figure).  Anything that cannot be analysed exits 2 with nothing written.
-int command_analyze(const std::string& curve, std::vector<std::string> overrides, const AnalyzeOptions& o) {
-  const bool run = is_run_output(curve);
-  const bool measured_flags = !o.indenter_file.empty() || !o.depth_column.empty() || !o.force_column.empty() ||
-                              !o.depth_unit.empty() || !o.force_unit.empty();
-  if (run && measured_flags)
-    throw InputError(curve, "--indenter", "is a run's output: its indenter and columns are the run's own (only "
-                                          "--set analysis.* applies)");
-  CurveAnalysis analysis;
-  if (run) {
-    analysis = analyze_run_curve(curve, overrides);
-  } else {
-    std::error_code ec;
-    if (!fs::is_regular_file(curve, ec))
-      throw InputError(curve, "curve", "is neither a run's output folder nor a CSV file of a load-depth curve");
-    for (const auto& [key, value] : {std::pair{"curve.depth_column", o.depth_column}, {"curve.force_column", o.force_column},
-                                     {"curve.depth_unit", o.depth_unit}, {"curve.force_unit", o.force_unit}})
-      if (!value.empty()) overrides.push_back(std::string(key) + "=" + toml_string(value));
-    const AnalysisSetup setup = read_analysis_setup(
-        o.indenter_file.empty() ? std::nullopt : std::optional<fs::path>(o.indenter_file), overrides);
-    analysis = analyze_measured_curve(curve, setup);
-  }
-  const fs::path out = o.out.empty() ? default_analysis_path(curve, analysis.simulated) : fs::path(o.out);
-  const fs::path script = o.plot ? figure_script(curve) : fs::path();
+int command_analyze(const std::string& curve, const std::vector<std::string>& overrides,
+                    const MeasuredCurveOptions& measured, const std::string& out_file, bool plot) {
+  const CurveAnalysis analysis = analyze_curve(curve, overrides, measured);
+  const fs::path out = out_file.empty() ? default_analysis_path(curve, analysis.simulated) : fs::path(out_file);
+  const fs::path script = plot ? figure_script(curve) : fs::path();
   write_file_atomically(out, analysis_json(analysis).dump(2) + "\n");
   fmt::print("{}analysis: {}\n", analysis_table(analysis), out.string());
-  if (o.plot) exec_python({script.string(), "--analysis", out.string()}, curve);
+  if (plot) exec_python({script.string(), "--analysis", out.string()}, curve);
   return 0;
 }
 
@@ -243,12 +220,7 @@ int command_fit(FitCommandLine cl, bool quiet, bool plot) {
   const FitResult result = fit(job.problem);
   if (!quiet && terminal) fmt::print(stderr, "\n");
   const fs::path dir = job.out_dir;
-  fs::create_directories(dir);
-  write_file_atomically(dir / "fit.json", fit_json(job.problem, result).dump(2) + "\n");
-  write_file_atomically(dir / "fit_curves.csv", fit_curves_csv(job.problem, result));
-  for (std::size_t d = 0; d < result.data.size(); ++d)
-    write_file_atomically(dir / (d == 0 ? std::string("fitted_case.toml") : fmt::format("fitted_case_{}.toml", d + 1)),
-                          to_toml(result.data[d].fitted_case));
+  write_fit_results(dir, job.problem, result);
   fmt::print("fit of {} data set(s), {} forward runs (and {} on the coarse meshes), {:.1f} s ({}):\n",
              job.problem.data.size(), result.forward_runs, result.coarse_runs, result.wall_seconds,
              result.data.front().gradients);
@@ -268,16 +240,39 @@ int command_fit(FitCommandLine cl, bool quiet, bool plot) {
 }
 
 struct SweepOptions {
-  std::string shard;
-  bool slurm = false, collect = false, list = false;
-  int shards = 0;
+  std::string shard, scheduler;
+  bool slurm = false, collect = false, list = false, dask = false;
+  int shards = 0, workers = 0;
 };
+
+/// `indentsim sweep --dask`: the Python package's Dask driver (python/indentsim/sweep.py), found
+/// beside this executable (build/python), run by Debian's python3 in place of this process.
+[[noreturn]] void exec_dask_sweep(const std::string& file, const SweepOptions& o, bool quiet) {
+  std::error_code ec;
+  const fs::path package = fs::read_symlink("/proc/self/exe", ec).parent_path() / "python";
+  if (ec || !fs::is_regular_file(package / "indentsim" / "sweep.py"))
+    throw InputError(file, "--dask", fmt::format("the Python package is not beside the executable (looked in {}); build "
+                                                 "with INDENTSIM_BUILD_PYTHON=ON",
+                                                 package.string()));
+  const char* old = std::getenv("PYTHONPATH");
+  const std::string path = package.string() + (old && *old ? ":" + std::string(old) : "");
+  ::setenv("PYTHONPATH", path.c_str(), 1);
+  std::vector<std::string> args{"-m", "indentsim.sweep", file};
+  if (!o.scheduler.empty()) args.insert(args.end(), {"--scheduler", o.scheduler});
+  if (o.workers > 0) args.insert(args.end(), {"--workers", std::to_string(o.workers)});
+  if (quiet) args.push_back("--quiet");
+  exec_python(args, file);
+}
 
 /// `indentsim sweep SWEEP.toml`: the sweep expanded and validated (exit 2 naming the key, nothing
 /// started), its manifest written; then one of: every run in this process and the table (the
 /// default), one shard (--shard i/N), the Slurm array's script (--slurm), the table of what is
 /// done (--collect), or the runs listed (--list).  Runs with a result are never run again.
 int command_sweep(const std::string& file, const SweepOptions& o, bool quiet) {
+  if (o.dask) {
+    expand_sweep(read_sweep_definition(file));  // bad input exits 2 here, before Python starts
+    exec_dask_sweep(file, o, quiet);
+  }
   const bool sharded = !o.shard.empty();
   const auto [i, n] = sharded ? parse_shard(o.shard) : std::pair{1, 1};
   const SweepManifest manifest = expand_sweep(read_sweep_definition(file));
@@ -410,7 +405,9 @@ int main(int argc, char** argv) {
   plot->add_option("dir", file, "the run's output folder")->required();
   plot->add_option("--step", plot_step, "the increment to show (default: the deepest of the load path)");
 
-  AnalyzeOptions analyze_options;
+  MeasuredCurveOptions analyze_options;
+  std::string analysis_out;
+  bool analysis_plot = false;
   CLI::App* analyze = app.add_subcommand(
       "analyze", "Oliver-Pharr hardness and modulus of every unloading branch of a run (its folder) or of a measured "
                  "load-depth CSV; writes analysis.json");
@@ -424,9 +421,9 @@ int main(int argc, char** argv) {
   analyze->add_option("--force-column", analyze_options.force_column, "measured curve: the force column's header name");
   analyze->add_option("--depth-unit", analyze_options.depth_unit, "measured curve: nm, um, mm or m (else from the header)");
   analyze->add_option("--force-unit", analyze_options.force_unit, "measured curve: mN, uN, nN or N (else from the header)");
-  analyze->add_option("--out", analyze_options.out, "analysis.json's path (default: the run's folder, or NAME.analysis.json "
+  analyze->add_option("--out", analysis_out, "analysis.json's path (default: the run's folder, or NAME.analysis.json "
                                                     "beside a measured file)");
-  analyze->add_flag("--plot", analyze_options.plot, "also draw the figure (PNG and SVG beside analysis.json)");
+  analyze->add_flag("--plot", analysis_plot, "also draw the figure (PNG and SVG beside analysis.json)");
 
   FitCommandLine fit_options;
   bool no_plot = false;
@@ -463,6 +460,13 @@ int main(int argc, char** argv) {
       ->needs(slurm_option);
   CLI::Option* collect_option = sweep->add_flag("--collect", sweep_options.collect, "write the table of the runs done so far");
   CLI::Option* list_option = sweep->add_flag("--list", sweep_options.list, "list the runs (hash, values, done) and exit");
+  CLI::Option* dask_option = sweep->add_flag("--dask", sweep_options.dask,
+                                             "run on Dask distributed (python3 -m indentsim.sweep): a LocalCluster, or --scheduler");
+  sweep->add_option("--scheduler", sweep_options.scheduler, "--dask: a running scheduler, e.g. tcp://head:8786")->needs(dask_option);
+  sweep->add_option("--workers", sweep_options.workers, "--dask: LocalCluster worker processes (default: one per core)")
+      ->check(CLI::Range(1, 4096))
+      ->needs(dask_option);
+  dask_option->excludes(shard_option)->excludes(slurm_option)->excludes(collect_option)->excludes(list_option);
   shard_option->excludes(slurm_option)->excludes(collect_option)->excludes(list_option);
   slurm_option->excludes(collect_option)->excludes(list_option);
   collect_option->excludes(list_option);
@@ -510,7 +514,7 @@ int main(int argc, char** argv) {
         throw InputError("--out", "--out", "must name a folder (it is empty)");
     if (keys->parsed()) return command_keys(markdown);
     if (plot->parsed()) return command_plot(file, plot_step);
-    if (analyze->parsed()) return command_analyze(file, overrides, analyze_options);
+    if (analyze->parsed()) return command_analyze(file, overrides, analyze_options, analysis_out, analysis_plot);
     if (fit->parsed()) return command_fit(fit_options, quiet, !no_plot);
     if (run->parsed()) return command_run(file, overrides, out, quiet);
     if (sweep->parsed()) return command_sweep(file, sweep_options, quiet);

@@ -148,13 +148,17 @@ void data_array(std::string& out, const char* name, int components, std::size_t 
 
 }  // namespace
 
+std::array<double, 2> nodal_displacement(const Mesh& mesh, const double* u, int node) {
+  const int eq_u = mesh.equation(Mesh::dof_u(node)), eq_v = mesh.equation(Mesh::dof_v(node));
+  return {eq_u >= 0 ? u[eq_u] : 0.0, eq_v >= 0 ? u[eq_v] : 0.0};
+}
+
 std::string vtu_document(const FieldFrame& frame, const Mesh& mesh, const double* u, const BulkModel& bulk,
                          const NodalStresses& nodal, const ContactBoundary& contact, const ContactResult& contact_state) {
   const auto nodes = static_cast<std::size_t>(mesh.nodes());
   const auto cells = static_cast<std::size_t>(mesh.elements());
   const auto displacement = [&](std::size_t n, int c) {
-    const int eq = mesh.equation(c == 0 ? Mesh::dof_u(static_cast<int>(n)) : Mesh::dof_v(static_cast<int>(n)));
-    return c < 2 && eq >= 0 ? u[eq] : 0.0;
+    return c < 2 ? nodal_displacement(mesh, u, static_cast<int>(n))[static_cast<std::size_t>(c)] : 0.0;
   };
   // Contact status per node: 1 in contact, 0 open candidate, -1 cannot touch the punch.
   std::vector<int> status(nodes, -1);

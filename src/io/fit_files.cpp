@@ -10,6 +10,7 @@
 
 #include "indentsim/csv_table.hpp"
 #include "indentsim/error.hpp"
+#include "indentsim/file_system.hpp"
 
 namespace indentsim {
 
@@ -375,6 +376,15 @@ std::string fit_curves_csv(const FitProblem& problem, const FitResult& r) {
                          r.data[d].model[i], r.data[d].model[i] - in.values[i]);
   }
   return out;
+}
+
+void write_fit_results(const std::filesystem::path& dir, const FitProblem& problem, const FitResult& result) {
+  std::filesystem::create_directories(dir);
+  write_file_atomically(dir / "fit.json", fit_json(problem, result).dump(2) + "\n");
+  write_file_atomically(dir / "fit_curves.csv", fit_curves_csv(problem, result));
+  for (std::size_t d = 0; d < result.data.size(); ++d)
+    write_file_atomically(dir / (d == 0 ? std::string("fitted_case.toml") : fmt::format("fitted_case_{}.toml", d + 1)),
+                          to_toml(result.data[d].fitted_case));
 }
 
 }  // namespace indentsim

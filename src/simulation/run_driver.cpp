@@ -132,6 +132,7 @@ RunReport drive(Simulation& sim, RunOutput& output, RunObserver& observer) {
     output.fail(e.what());
     throw;
   }
+  observer.final_state(sim);
   report.curve = output.records();
   report.last_step = report.curve.empty() ? 0 : report.curve.back().step;
   if (sim.near_field_growths() > 0 || sim.near_field_rebuilds() > 0)
