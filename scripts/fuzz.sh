@@ -6,7 +6,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:-60}
 jobs=$(nproc 2>/dev/null || echo 2)
-cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
+cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DINDENTSIM_BUILD_PYTHON=OFF \
       -DINDENTSIM_SANITIZE=address,undefined -DINDENTSIM_BUILD_FUZZERS=ON \
       -DINDENTSIM_BUILD_TESTS=OFF -DINDENTSIM_BUILD_BENCHMARKS=OFF
 cmake --build build-fuzz -j "$jobs" --target fuzz_load_case fuzz_checkpoint

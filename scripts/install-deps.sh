@@ -12,6 +12,8 @@ packages=(
   libceres-dev               # Ceres Solver: the bounded Levenberg-Marquardt of indentsim fit
   libopenblas0-pthread       # BLAS for CHOLMOD's supernodal factorization (takes over libblas.so.3)
   python3 python3-matplotlib
+  python3-dev pybind11-dev python3-numpy  # the Python module (build/python/indentsim)
+  python3-dask python3-distributed python3-tqdm  # sweeps on Dask distributed, with a progress bar
   clang libclang-rt-14-dev   # libFuzzer targets (scripts/fuzz.sh)
   libomp-14-dev              # OpenMP for clang: Debian's SUNDIALS CMake package requires OpenMP of the configuring compiler
 )
