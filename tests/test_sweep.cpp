@@ -6,12 +6,14 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <set>
 #include <sstream>
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include "indentsim/error.hpp"
 #include "indentsim/sweep.hpp"
 #include "indentsim/sweep_results.hpp"
 #include "test_support.hpp"
@@ -256,4 +258,32 @@ TEST_F(SweepTest, BadSweepFilesExitWith2NamingTheKeyAndStartNothing) {
     EXPECT_NE(err().find("--shard"), std::string::npos) << err();
   }
   EXPECT_FALSE(fs::exists(out));
+}
+
+TEST_F(SweepTest, IntegerKeysStayIntegersAndShareALatinHypercubesStrataEqually) {
+  const fs::path file = write_sweep("lhs.toml", "design = \"latin_hypercube\"\nsamples = 8\nseed = 3",
+                                    "[vary]\n\"mesh.contact_nodes\" = {from = 6, to = 9}\n"
+                                    "\"material.E\" = {from = 100e9, to = 300e9}\n");
+  const SweepManifest m = expand_sweep(read_sweep_definition(file));
+  ASSERT_EQ(m.keys.front(), "material.E");
+  std::map<std::string, int> counts;
+  for (const SweepRun& r : m.runs) ++counts[r.values[1]];
+  EXPECT_EQ(counts, (std::map<std::string, int>{{"6", 2}, {"7", 2}, {"8", 2}, {"9", 2}}));
+  // A float key with integer ends is not an integer key; an integer key refuses fractional ends.
+  const fs::path grid = write_sweep("grid.toml", "", "[vary]\n\"geometry.lx\" = {from = 1, to = 2, count = 3}\n");
+  const SweepManifest g = expand_sweep(read_sweep_definition(grid));
+  ASSERT_EQ(g.runs.size(), 3u);
+  EXPECT_EQ(g.runs[1].values[0], "1.5");
+  const fs::path bad = write_sweep("bad.toml", "", "[vary]\n\"mesh.contact_nodes\" = {from = 6.5, to = 9, count = 2}\n");
+  EXPECT_THROW(read_sweep_definition(bad), InputError);
+}
+
+TEST_F(SweepTest, AFolderUnderAHashWithoutAResultIsReplacedByTheRun) {
+  const fs::path results_dir = dir_ / "out";
+  const fs::path file = write_sweep("s.toml", "out = \"" + results_dir.string() + "\"", "[vary]\n\"material.E\" = [200e9]\n");
+  const SweepManifest m = expand_sweep(read_sweep_definition(file));
+  fs::create_directories(results_dir / "runs" / m.runs[0].hash / "stray");
+  ASSERT_EQ(cli("sweep " + file.string() + " --quiet"), 0) << err();
+  EXPECT_TRUE(SweepResults(results_dir).complete(m.runs[0].hash));
+  EXPECT_FALSE(fs::exists(results_dir / "runs" / m.runs[0].hash / "stray"));
 }

@@ -13,6 +13,10 @@ namespace indentsim {
 /// Writes all of `data` to the open descriptor `fd` (retrying short writes and EINTR); throws IoError.
 void write_all(int fd, const char* data, std::size_t size, const std::filesystem::path& file);
 
+/// A part of a file name no other writer uses at the same time, on this host or another sharing
+/// the file system: "HOST-PID-N".
+std::string unique_name_part();
+
 /// Writes `text` to `path` atomically: a temporary file beside it, written whole, then renamed.
 /// On failure the temporary file is removed and the previous `path` (if any) is left untouched.
 void write_file_atomically(const std::filesystem::path& path, const std::string& text);

@@ -27,6 +27,8 @@ public:
   virtual void note(const std::string& /*line*/) {}
   /// A warning (plausibility, the error estimate's caveats, the solver's remarks).
   virtual void warning(const std::string& /*text*/) {}
+  /// The increments begin (after the pilot and the error estimate's companions).
+  virtual void increments_started() {}
   /// After each converged increment, of `planned` increments on the load path.
   virtual void increment(const IncrementRecord& /*record*/, int /*planned*/, const std::string& /*force_unit*/) {}
   /// The increments are over, however they ended (a progress line is closed here).

@@ -37,7 +37,7 @@ struct SweptKey {
   /// A range {from, to} (latin_hypercube samples it; grid takes `count` values).
   double from = 0.0, to = 0.0;
   bool logarithmic = false;
-  bool integer = false;  ///< both ends integers on a linear scale: values are rounded
+  bool integer = false;  ///< an integer key (mesh.contact_nodes, ...): values are integers
 };
 
 /// What a sweep file asks for.
@@ -66,6 +66,7 @@ struct SweepManifest {
   SweepDefinition definition;
   std::vector<std::string> keys;  ///< the varied keys, sorted by name (a grid varies the first slowest)
   std::vector<SweepRun> runs;
+  int merged_duplicates = 0;  ///< combinations that gave an earlier run's case (run once)
 
   /// manifest.json: the definition's essentials and every run (hash, values, case).
   std::string to_json() const;

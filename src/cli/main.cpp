@@ -57,6 +57,7 @@ public:
   void note(const std::string& line) override {
     if (!quiet_) fmt::print("{}\n", line);
   }
+  void increments_started() override { start_ = last_ = clock::now(); }  // elapsed: the increments'
   void warning(const std::string& text) override {
     clear_line();
     fmt::print(stderr, "warning: {}\n", text);
@@ -277,6 +278,9 @@ int command_sweep(const std::string& file, const SweepOptions& o, bool quiet) {
   const auto [i, n] = sharded ? parse_shard(o.shard) : std::pair{1, 1};
   const SweepManifest manifest = expand_sweep(read_sweep_definition(file));
   const SweepResults results(manifest.definition.out);
+  if (manifest.merged_duplicates > 0)
+    fmt::print(stderr, "note: {} combination(s) of {} gave the case of an earlier run; each case is run once ({} runs)\n",
+               manifest.merged_duplicates, file, manifest.runs.size());
   if (o.list) {
     for (const SweepRun& r : manifest.runs) {
       std::string values;
@@ -455,8 +459,9 @@ int main(int argc, char** argv) {
   sweep->add_option("sweep", file, "sweep file (TOML: [sweep] base, out, design; [set]; [vary])")->required();
   CLI::Option* shard_option = sweep->add_option("--shard", sweep_options.shard, "run only shard i of N (i/N): runs i, i+N, ...");
   CLI::Option* slurm_option = sweep->add_flag("--slurm", sweep_options.slurm, "write OUT/sweep.sbatch, a job array of shards");
-  sweep->add_option("--shards", sweep_options.shards, "--slurm: the number of array tasks (default: runs, at most 100)")
-      ->check(CLI::Range(1, 100000))
+  sweep->add_option("--shards", sweep_options.shards,
+                    "--slurm: the number of array tasks (default: runs, at most 100; Slurm's MaxArraySize is 1001 by default)")
+      ->check(CLI::Range(1, 1000))
       ->needs(slurm_option);
   CLI::Option* collect_option = sweep->add_flag("--collect", sweep_options.collect, "write the table of the runs done so far");
   CLI::Option* list_option = sweep->add_flag("--list", sweep_options.list, "list the runs (hash, values, done) and exit");

@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
 #include <csignal>
 #include <cstdlib>
@@ -68,8 +69,20 @@ void write_all(int fd, const char* data, std::size_t size, const std::filesystem
   }
 }
 
+std::string unique_name_part() {
+  static std::atomic<long> counter{0};
+  char host[256] = {};
+  if (::gethostname(host, sizeof host - 1) != 0) host[0] = '\0';
+  std::string name = host[0] ? host : "host";
+  for (char& c : name)
+    if (c == '/' || c == '.') c = '_';
+  return fmt::format("{}-{}-{}", name, ::getpid(), counter++);
+}
+
 void write_file_atomically(const std::filesystem::path& path, const std::string& text) {
-  const std::filesystem::path temporary = path.string() + ".tmp";
+  // A name of its own per writer: two processes (shards of a sweep) writing the same file at
+  // once must not share the temporary.  The ".tmp" extension is what cleanups look for.
+  const std::filesystem::path temporary = path.string() + "." + unique_name_part() + ".tmp";
   const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) throw_io_error(temporary, "creating", errno);
   try {

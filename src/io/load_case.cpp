@@ -907,8 +907,12 @@ std::string toml_number(double value) {
 std::string toml_string(const std::string& s) {
   std::string quoted = "\"";
   for (char c : s) {
-    if (c == '"' || c == '\\') quoted += '\\';
-    quoted += c;
+    if (c == '"' || c == '\\') quoted += std::string("\\") + c;
+    else if (c == '\n') quoted += "\\n";
+    else if (c == '\t') quoted += "\\t";
+    else if (c == '\r') quoted += "\\r";
+    else if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) quoted += fmt::format("\\u{:04X}", static_cast<unsigned char>(c));
+    else quoted += c;
   }
   return quoted + "\"";
 }

@@ -94,6 +94,7 @@ RunReport drive(Simulation& sim, RunOutput& output, RunObserver& observer) {
   report.dir = lc.output.dir;
   report.curve_file = output.curve_path();
   report.load_case = lc;
+  observer.increments_started();
   try {
     try {
       sim.run([&](const IncrementRecord& r) {

@@ -45,14 +45,27 @@ std::string value_text(const toml::node& node, const std::string& file, const st
 }
 
 /// The value at `fraction` in [0, 1] of a range, as override text.
-std::string value_text_of_fraction(const SweptKey& k, double fraction) {
+std::string value_text_of_fraction(const SweptKey& k, double fraction, bool stratum) {
+  if (k.integer) {
+    // An integer key: a grid rounds its evenly spaced values; a Latin hypercube's stratum of
+    // [from, to + 1) maps to floor(), so each integer gets an equal share of the strata.
+    const double v = stratum ? std::min(std::floor(k.from + fraction * (k.to - k.from + 1.0)), k.to)
+                             : std::round(k.from + fraction * (k.to - k.from));
+    return fmt::format("{}", static_cast<int64_t>(v));
+  }
+  if (fraction == 0.0) return toml_number(k.from);
+  if (!stratum && fraction == 1.0) return toml_number(k.to);
   const double v = k.logarithmic ? std::exp(std::log(k.from) + fraction * (std::log(k.to) - std::log(k.from)))
                                  : k.from + fraction * (k.to - k.from);
-  if (fraction == 0.0) return k.integer ? fmt::format("{}", static_cast<int64_t>(k.from)) : toml_number(k.from);
-  if (fraction == 1.0) return k.integer ? fmt::format("{}", static_cast<int64_t>(k.to)) : toml_number(k.to);
-  if (k.integer) return fmt::format("{}", static_cast<int64_t>(std::llround(v)));
   // 15 significant digits: 0.2 + 0.5 (0.4 - 0.2) is 0.3, not 0.30000000000000004.
   return toml_number(std::stod(fmt::format("{:.15g}", v)));
+}
+
+/// Whether the load case declares `key` an integer (mesh.contact_nodes, solver.max_newton, ...).
+bool integer_key(const std::string& key) {
+  for (const auto& d : describe_keys())
+    if (d.key == key) return d.type.rfind("integer", 0) == 0;
+  return false;
 }
 
 /// [vary] "section.key" = [values] or {from, to, count, scale}.
@@ -91,14 +104,17 @@ SweptKey read_swept_key(const std::string& key, const toml::node& node, const st
   }
   if (k.logarithmic && (k.from <= 0.0 || k.to <= 0.0))
     throw InputError(file, where, fmt::format("a log range needs positive ends (got {} to {})", k.from, k.to));
-  k.integer = !k.logarithmic && range->get("from")->is_integer() && range->get("to")->is_integer();
+  k.integer = integer_key(key);
+  if (k.integer && (k.from != std::floor(k.from) || k.to != std::floor(k.to)))
+    throw InputError(file, where, fmt::format("{} is an integer: give integer ends (got {} to {})", key, k.from, k.to));
+  if (k.integer && k.logarithmic) throw InputError(file, where + ".scale", "an integer key takes a linear range");
   if (const toml::node* count = range->get("count")) {
     const auto c = count->value_exact<int64_t>();
     if (!c || *c < 1 || *c > 100000) throw InputError(file, where + ".count", "must be an integer in [1, 100000]");
     if (*c == 1 && k.from != k.to)
       throw InputError(file, where + ".count", "is 1 but from != to: which end? (give a list of one value)");
     if (*c > 1 && k.from == k.to) throw InputError(file, where, "is an empty range: from = to with count > 1");
-    for (int64_t j = 0; j < *c; ++j) k.values.push_back(value_text_of_fraction(k, *c == 1 ? 0.0 : double(j) / double(*c - 1)));
+    for (int64_t j = 0; j < *c; ++j) k.values.push_back(value_text_of_fraction(k, *c == 1 ? 0.0 : double(j) / double(*c - 1), false));
   }
   return k;
 }
@@ -151,7 +167,7 @@ std::vector<std::vector<std::string>> design_points(const SweepDefinition& d) {
     const std::vector<int> strata = permutation(d.samples, rng);
     for (int i = 0; i < d.samples; ++i) {
       const double fraction = (strata[static_cast<std::size_t>(i)] + unit_draw(rng)) / d.samples;
-      points[static_cast<std::size_t>(i)].push_back(value_text_of_fraction(k, fraction));
+      points[static_cast<std::size_t>(i)].push_back(value_text_of_fraction(k, fraction, true));
     }
   }
   return points;
@@ -294,7 +310,10 @@ SweepManifest expand_sweep(const SweepDefinition& d) {
     }
     SweepRun run;
     run.hash = case_hash(lc);
-    if (!hashes.insert(run.hash).second) continue;  // the same case twice (rounded integers)
+    if (!hashes.insert(run.hash).second) {  // the same case twice (rounded integers, a repeated value)
+      ++m.merged_duplicates;
+      continue;
+    }
     run.index = static_cast<int>(m.runs.size());
     run.values = points[p];
     run.case_toml = to_toml(lc);

@@ -1,14 +1,13 @@
 // A sweep's results folder, keyed by hash (sweep_results.hpp).
 #include "indentsim/sweep_results.hpp"
 
-#include <atomic>
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
+#include <new>
 #include <sstream>
 
-#include <unistd.h>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -166,9 +165,8 @@ std::optional<SweepRunResult> SweepResults::result(const std::string& hash) cons
 SweepRunResult SweepResults::run(const SweepRun& run, const std::vector<std::string>& keep) const {
   // A private folder per attempt: two workers given the same run (a retry while the first is
   // still alive) never share one.
-  static std::atomic<long> attempts{0};
   const fs::path runs = out_ / "runs";
-  const fs::path partial = runs / ".partial" / fmt::format("{}.{}.{}", run.hash, ::getpid(), attempts++);
+  const fs::path partial = runs / ".partial" / fmt::format("{}.{}", run.hash, unique_name_part());
   fs::create_directories(partial.parent_path());
   const auto start = std::chrono::steady_clock::now();
   SweepRunResult result;
@@ -185,8 +183,17 @@ SweepRunResult SweepResults::run(const SweepRun& run, const std::vector<std::str
     result.message = report.message;
     read_figures(report, result);
   } catch (const InputError& e) {
+    // The run's folder could not be prepared (a full disk, a quota): the results folder's
+    // problem, not the run's.  It must not become a result that is never run again.
+    if (e.key() == "output.dir") {
+      remove_quietly(partial);
+      throw IoError(partial.string(), "preparing a sweep run's folder", e.problem());
+    }
     result.status = "failed";
     result.message = e.what();
+  } catch (const std::bad_alloc&) {
+    remove_quietly(partial);
+    throw;
   } catch (const IoError&) {
     remove_quietly(partial);
     throw;
@@ -209,13 +216,25 @@ SweepRunResult SweepResults::run(const SweepRun& run, const std::vector<std::str
   // The rename makes the result appear whole or not at all; a result already there (another
   // worker's attempt at the same run) is kept, and this one dropped.
   const fs::path done = runs / run.hash;
-  if (std::rename(partial.c_str(), done.c_str()) != 0) {
+  for (int attempt = 0;; ++attempt) {
+    if (std::rename(partial.c_str(), done.c_str()) == 0) return result;
     const int error = errno;
-    remove_quietly(partial);
-    if (error != EEXIST && error != ENOTEMPTY) throw_io_error(done, "move a finished run into place", error);
-    if (const auto earlier = this->result(run.hash)) return *earlier;
+    if (error != EEXIST && error != ENOTEMPTY) {
+      remove_quietly(partial);
+      throw_io_error(done, "moving a finished run into place", error);
+    }
+    if (const auto earlier = this->result(run.hash)) {
+      remove_quietly(partial);
+      return *earlier;
+    }
+    // A folder under the hash without result.json is no result (left by hand, or by a version
+    // that wrote it differently): it is replaced, once.
+    if (attempt > 0) {
+      remove_quietly(partial);
+      throw_io_error(done, "replacing a folder that holds no result", error);
+    }
+    remove_quietly(done);
   }
-  return result;
 }
 
 SweepTally SweepResults::collect(const SweepManifest& manifest) const {
