@@ -54,7 +54,7 @@ def _toml_value(value, key):
     if isinstance(value, (float, np.floating)):
         return repr(float(value))
     if isinstance(value, (str, os.PathLike)):
-        return json.dumps(os.fspath(value))  # a JSON string is a TOML basic string
+        return json.dumps(os.fspath(value), ensure_ascii=False)  # a JSON string is a TOML basic string
     if isinstance(value, (list, tuple, np.ndarray)):
         return "[" + ", ".join(_toml_value(v, key) for v in value) + "]"
     raise InputError(f"case: {key}: a value must be a number, a string, a boolean or a list of them "
@@ -131,8 +131,9 @@ class Result:
         return directory
 
     def __repr__(self):
-        return (f"<indentsim.Result {self.status}: {len(self.curve['step']) - 1} increments, "
-                f"P_max = {self.summary.get('peak_force'):.6g} {self.summary['units']['force']}>")
+        peak = self.summary.get("peak_force")
+        peak = f"{peak:.6g} {self.summary.get('units', {}).get('force', '')}" if peak is not None else "-"
+        return f"<indentsim.Result {self.status}: {len(self.curve['step']) - 1} increments, P_max = {peak}>"
 
 
 def run(case, overrides=None, out=None):
@@ -182,7 +183,7 @@ def fit(input, data=None, free=None, bounds=None, overrides=None, starts=None, o
     c.input = os.fspath(input)
     c.data_files = [os.fspath(data)] if isinstance(data, (str, os.PathLike)) else [os.fspath(d) for d in data or []]
     c.free = list(free or [])
-    c.bounds = [f"{k}={lo!r}:{hi!r}" for k, (lo, hi) in (bounds or {}).items()]
+    c.bounds = [f"{k}={float(lo)!r}:{float(hi)!r}" for k, (lo, hi) in (bounds or {}).items()]
     c.overrides = _overrides(overrides)
     c.starts = starts
     c.out = os.fspath(out) if out else ""
