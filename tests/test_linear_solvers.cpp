@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -86,4 +87,17 @@ TEST(LinearSolvers, OneBlasThreadPerRunUnlessTheEnvironmentAsks) {
   curve("elastic.toml", {"mesh.contact_nodes=6", "solver.linear=cholmod"});
   if (const char* asked = std::getenv("OPENBLAS_NUM_THREADS")) EXPECT_EQ(get(), std::atoi(asked));
   else EXPECT_EQ(get(), 1);
+}
+
+// CMakeLists.txt links OpenBLAS ahead of Ceres' ATLAS: the BLAS routines CHOLMOD calls by name
+// (its supernodal kernels: dgemm, dsyrk, dtrsm, dpotrf) are OpenBLAS's, not ATLAS's generic ones.
+TEST(LinearSolvers, CholmodCallsOpenBlas) {
+  for (const char* routine : {"dgemm_", "dsyrk_", "dtrsm_", "dpotrf_"}) {
+    SCOPED_TRACE(routine);
+    void* symbol = dlsym(RTLD_DEFAULT, routine);
+    ASSERT_NE(symbol, nullptr);
+    Dl_info info{};
+    ASSERT_NE(dladdr(symbol, &info), 0);
+    EXPECT_NE(std::string(info.dli_fname).find("openblas"), std::string::npos) << info.dli_fname;
+  }
 }
