@@ -89,13 +89,16 @@ struct OutputInput {
 enum class LinearSolverChoice { automatic, klu, cholmod };
 /// Whether the linear-elastic far field is condensed out of the Newton systems (docs/DESIGN.md 7).
 enum class FarFieldChoice { automatic, condense, full };
-/// Whether a converging Newton iteration may keep the last factorization (a chord step).
-enum class JacobianChoice { reuse, fresh };
+/// How a Newton iteration solves its linear system (docs/DESIGN.md §8): GMRES preconditioned by a
+/// factorization kept across the iterations (krylov), a factorization per iteration that a
+/// converging iteration may keep (reuse, a chord step), or a factorization every iteration
+/// (fresh); automatic: krylov for an inelastic specimen, reuse for an elastic one.
+enum class JacobianChoice { automatic, reuse, fresh, krylov };
 
 struct SolverInput {
   LinearSolverChoice linear = LinearSolverChoice::klu;  ///< "klu" (default) | "cholmod" | "auto"
   FarFieldChoice far_field = FarFieldChoice::automatic;  ///< "auto" (default) | "condense" | "full"
-  JacobianChoice jacobian = JacobianChoice::reuse;       ///< "reuse" (default) | "fresh"
+  JacobianChoice jacobian = JacobianChoice::automatic;   ///< "auto" (default) | "krylov" | "reuse" | "fresh"
   double tolerance = 1e-11;  ///< residual max-norm relative to E* x max depth
   int max_newton = 50;       ///< Newton iterations per increment before a cutback
   int max_cutbacks = 10;     ///< halvings of one increment before the run stops

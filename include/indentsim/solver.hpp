@@ -1,9 +1,12 @@
 #pragma once
 // One increment of the load path: the semi-smooth Newton solve of F(u; alpha) = 0 driven by
-// SUNDIALS KINSOL with the SuiteSparse KLU sparse direct solver (SUNLinSol_KLU).
+// SUNDIALS KINSOL, its linear systems solved with the SuiteSparse KLU sparse direct solver (or
+// CHOLMOD's), either directly at every iteration or as the preconditioner of GMRES (docs/DESIGN.md
+// §8).
 //
-// The SUNDIALS objects (context, vectors, matrix, linear solver, KINSOL memory) are owned by
-// RAII handles inside NewtonSolver (src/solvers/sundials_handles.hpp); this header does not expose them.
+// The SUNDIALS, KLU and CHOLMOD objects (context, vectors, matrix, linear solvers, factors, KINSOL
+// memory) are owned by RAII handles inside NewtonSolver (src/solvers/sundials_handles.hpp,
+// klu_solver.hpp, cholmod_solver.hpp); this header does not expose them.
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -41,6 +44,10 @@ public:
   virtual void residual(const double* u, double alpha, double* f) = 0;
   /// Values of the Jacobian dF/du at u, in the fixed pattern.
   virtual void jacobian(const double* u, double alpha, double* values) = 0;
+  /// Values (in the pattern) of a matrix that depends on the mesh alone, on which the sparse LU
+  /// chooses its pivots once for all the Jacobians to come (src/solvers/klu_solver.hpp); false
+  /// when there is none (the first Jacobian factored is the reference then).
+  virtual bool pivot_reference(double* /*values*/) { return false; }
 };
 
 /// The bulk model (elastic or plastic) with Signorini contact: F = f_int(u), with the contact
@@ -48,17 +55,22 @@ public:
 /// handles the material nonlinearity and the contact together.
 class ContactEquations : public IncrementEquations {
 public:
-  ContactEquations(const StiffnessPattern& pattern, BulkOperator& bulk, const ContactBoundary& contact);
+  /// `elastic` is the linear elastic bulk of the same system (the same object for an elastic
+  /// scene): its stiffness is the pivot reference.
+  ContactEquations(const StiffnessPattern& pattern, BulkOperator& bulk, BulkOperator& elastic,
+                   const ContactBoundary& contact);
   const StiffnessPattern& pattern() const override { return pattern_; }
   /// Solve with another bulk model on the same pattern (the elastic predictor of a plastic run).
   void use_bulk(BulkOperator& bulk) { bulk_ = &bulk; }
   std::uint64_t active_set_signature() const override { return signature_; }
   void residual(const double* u, double alpha, double* f) override;
   void jacobian(const double* u, double alpha, double* values) override;
+  bool pivot_reference(double* values) override;
 
 private:
   const StiffnessPattern& pattern_;
   BulkOperator* bulk_;
+  BulkOperator& elastic_;
   const ContactBoundary& contact_;
   std::vector<std::vector<std::int64_t>> contact_rows_;  // value positions of each candidate's row
   std::vector<double> internal_force_;                    // scratch, sized once
@@ -70,18 +82,32 @@ private:
   std::uint64_t signature_ = 0;
 };
 
-/// The sparse direct solver under KINSOL: SuiteSparse KLU (through SUNLinSol_KLU) or CHOLMOD's
-/// supernodal Cholesky (through a SUNLinearSolver of our own).
+/// The sparse direct solver that factors the Newton matrices: SuiteSparse KLU or CHOLMOD's
+/// supernodal Cholesky (each through a SUNLinearSolver of our own).
 enum class LinearSolverKind { klu, cholmod };
+
+/// How a Newton iteration solves J du = -F (docs/DESIGN.md §8).
+enum class NewtonLinearSolve {
+  /// KINSOL's linear solver is the sparse direct solver: a factorization per iteration (a chord
+  /// step may keep the last one).
+  direct,
+  /// GMRES (SUNDIALS SPGMR) on the exact Jacobian, inexact Newton with Eisenstat and Walker's
+  /// forcing terms, right-preconditioned by the sparse factorization of a Jacobian of the same
+  /// solve: the first iterate's, refreshed at the second (the first step moves the contact set and
+  /// the yield front) and whenever GMRES stops short of its tolerance.
+  krylov
+};
 
 struct NewtonSettings {
   LinearSolverKind linear = LinearSolverKind::klu;
+  NewtonLinearSolve newton_linear = NewtonLinearSolve::direct;
   double displacement_scale = 1.0;  ///< typical |u| [m] (KINSOL's uscale = 1/this)
   double force_scale = 1.0;         ///< typical |F| [N/m or N] (KINSOL's fscale = 1/this)
   double tolerance = 1e-11;         ///< on max |F| / force_scale
   int max_iterations = 50;
-  /// Chord steps: a converging iteration keeps the last factorization (NewtonSolver).  Off, every
-  /// iteration factors its own Jacobian (exact semi-smooth Newton, quadratic near the solution).
+  /// Direct solves only.  Chord steps: a converging iteration keeps the last factorization
+  /// (NewtonSolver).  Off, every iteration factors its own Jacobian (exact semi-smooth Newton,
+  /// quadratic near the solution).
   bool chord_steps = true;
 };
 
@@ -93,11 +119,12 @@ enum class Globalization {
 struct NewtonReport {
   bool converged = false;
   long iterations = 0;
-  long factorizations = 0;      ///< numeric LU factorizations (KLU factor or refactor)
+  long factorizations = 0;      ///< numeric factorizations (KLU or CHOLMOD)
+  long linear_iterations = 0;   ///< GMRES iterations of Krylov solves (0 for direct solves)
   long symbolic_analyses = 0;   ///< KLU symbolic analyses (ideally one per mesh)
   double residual = 0.0;        ///< max |F| / force_scale at the returned u
-  /// 1-norm condition estimate of the first Jacobian of the solve (KLU's condest, or 1/rcond of
-  /// CHOLMOD's factor): how much accuracy the factorization may lose.
+  /// 1-norm condition estimate of the first Jacobian factored in the solve (KLU's condest, or
+  /// 1/rcond of CHOLMOD's factor): how much accuracy the factorization may lose.
   double condition_estimate = 0.0;
   int kinsol_flag = 0;
   std::string message;          ///< KINSOL's own words when it failed
@@ -118,11 +145,13 @@ public:
 
   /// Solves J(u) x = b in place for each right-hand side, J the generalized Jacobian of the
   /// equations at u (with the contact set active at u): the forward sensitivities of a converged
-  /// state.  One numeric factorization (counted), reusing the symbolic analysis.
+  /// state.  One numeric factorization (counted), reusing the symbolic analysis; a direct solve
+  /// whatever the settings' newton_linear.
   void solve_linearized(const std::vector<double>& u, double alpha, std::vector<std::vector<double>>& right_hand_sides);
 
   long total_factorizations() const;
   long total_symbolic_analyses() const;
+  long total_linear_iterations() const;
 
 private:
   struct Impl;

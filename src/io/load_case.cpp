@@ -42,7 +42,10 @@ constexpr Choice<ElementChoice> element_names[] = {
     {"auto", ElementChoice::automatic}, {"q1", ElementChoice::q1}, {"bbar", ElementChoice::bbar}};
 constexpr Choice<LinearSolverChoice> linear_names[] = {
     {"klu", LinearSolverChoice::klu}, {"cholmod", LinearSolverChoice::cholmod}, {"auto", LinearSolverChoice::automatic}};
-constexpr Choice<JacobianChoice> jacobian_names[] = {{"reuse", JacobianChoice::reuse}, {"fresh", JacobianChoice::fresh}};
+constexpr Choice<JacobianChoice> jacobian_names[] = {{"auto", JacobianChoice::automatic},
+                                                     {"krylov", JacobianChoice::krylov},
+                                                     {"reuse", JacobianChoice::reuse},
+                                                     {"fresh", JacobianChoice::fresh}};
 constexpr Choice<SceneKind> scene_names[] = {{"plane_strain", SceneKind::plane_strain},
                                              {"axisymmetric", SceneKind::axisymmetric}};
 // "cylinder" is the plane-strain reading of "sphere": the same circular profile of punch.radius.
@@ -692,8 +695,10 @@ const std::vector<KeyDeclaration>& key_declarations() {
                             "(the whole mesh), auto (condense unless the near field is over 80% of the unknowns)"},
                            far_field_names, [](auto& c) -> auto& { return c.solver.far_field; }));
     k.push_back(choice_key({"solver", "jacobian", "choice", "", "",
-                            "reuse (a converging iteration may keep the last factorization), fresh (factor every "
-                            "iteration)"},
+                            "how a Newton iteration solves its linear system: krylov (GMRES preconditioned by a "
+                            "factorization kept across the iterations), reuse (a factorization per iteration; a "
+                            "converging one may keep the last), fresh (factor every iteration), auto (krylov for a "
+                            "plastic specimen, reuse for an elastic one)"},
                            jacobian_names, [](auto& c) -> auto& { return c.solver.jacobian; }));
     return k;
   }();

@@ -228,7 +228,14 @@ void Simulation::build(const RunPlan& run_plan, const std::optional<NearField>& 
       material.plane_strain_modulus() * load_case_.max_depth(), plan_.contact_half_width_estimate);
   settings_.tolerance = load_case_.solver.tolerance;
   settings_.max_iterations = load_case_.solver.max_newton;
-  settings_.chord_steps = load_case_.solver.jacobian == JacobianChoice::reuse;
+  // Plastic Newton iterations contract linearly (each moves the yield front across Gauss points
+  // where the tangent jumps), so a factorization kept as GMRES's preconditioner serves several of
+  // them; elastic contact converges in two or three exact steps on a small condensed system.
+  const JacobianChoice jacobian = load_case_.solver.jacobian == JacobianChoice::automatic
+                                      ? (law ? JacobianChoice::krylov : JacobianChoice::reuse)
+                                      : load_case_.solver.jacobian;
+  settings_.newton_linear = jacobian == JacobianChoice::krylov ? NewtonLinearSolve::krylov : NewtonLinearSolve::direct;
+  settings_.chord_steps = jacobian == JacobianChoice::reuse;
   if (near_field) {
     near_ = *near_field;
   } else if (run_plan.plastic_zone.empty()) {
@@ -376,9 +383,10 @@ void Simulation::build_system() {
     condensation_ = std::make_unique<FarFieldCondensation>(*stiffness_, *contact_, near_);
     condensed_elastic_ = std::make_unique<CondensedBulk>(*condensation_, nullptr);
     if (plastic_) condensed_bulk_ = std::make_unique<CondensedBulk>(*condensation_, plastic_.get());
-    equations_ = std::make_unique<ContactEquations>(condensation_->pattern(), system_bulk(), condensation_->contact());
+    equations_ = std::make_unique<ContactEquations>(condensation_->pattern(), system_bulk(), *condensed_elastic_,
+                                                    condensation_->contact());
   } else {
-    equations_ = std::make_unique<ContactEquations>(*pattern_, *bulk_, *contact_);
+    equations_ = std::make_unique<ContactEquations>(*pattern_, *bulk_, *stiffness_, *contact_);
   }
   settings_.linear = linear_solver_ = choose_linear_solver(load_case_.solver.linear, static_cast<int>(system_unknowns()));
   newton_ = std::make_unique<NewtonSolver>(*equations_, settings_);

@@ -11,27 +11,24 @@
 // The symbolic analysis (fill-reducing ordering, supernodes) is done once per pattern.
 #include <memory>
 
-#include "sundials_handles.hpp"
+#include "sparse_direct_solver.hpp"
 
 namespace indentsim {
 
-class CholmodSolver {
+class CholmodSolver final : public SparseDirectSolver {
 public:
   explicit CholmodSolver(SUNContext context);
-  ~CholmodSolver();
+  ~CholmodSolver() override;
   CholmodSolver(const CholmodSolver&) = delete;
   CholmodSolver& operator=(const CholmodSolver&) = delete;
 
-  /// The SUNDIALS face of the solver (owned by this object) to hand to KINSetLinearSolver.
-  SUNLinearSolver get() const { return shell_.get(); }
-  long numeric_factorizations() const;
-  /// The next setup keeps the current factor instead of factoring its matrix (a chord step).
-  void keep_factor_once();
-  /// Withdraws a pending keep_factor_once (the next setup factors its matrix).
-  void clear_keep_factor();
-  long symbolic_analyses() const;
+  SUNLinearSolver get() const override { return shell_.get(); }
+  long numeric_factorizations() const override;
+  void keep_factor_once() override;
+  void clear_keep_factor() override;
+  long symbolic_analyses() const override;
   /// 1 / rcond of the last factor (CHOLMOD's cheap estimate from the diagonal of L).
-  double condition_estimate() const;
+  double condition_estimate() const override;
 
   struct State;  // CHOLMOD's common block, matrix, factor and workspace
 

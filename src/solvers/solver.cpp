@@ -6,10 +6,13 @@
 #include <stdexcept>
 #include <type_traits>
 
+#include <sunlinsol/sunlinsol_spgmr.h>
+
 #include "indentsim/error.hpp"
 #include "indentsim/interruption.hpp"
 
 #include "cholmod_solver.hpp"
+#include "klu_solver.hpp"
 #include "sundials_handles.hpp"
 
 namespace indentsim {
@@ -20,8 +23,9 @@ static_assert(std::is_same_v<sunindextype, std::int64_t>,
 // ---------------------------------------------------------------------------------------------
 // The residual and Jacobian of elastic contact.
 
-ContactEquations::ContactEquations(const StiffnessPattern& pattern, BulkOperator& bulk, const ContactBoundary& contact)
-    : pattern_(pattern), bulk_(&bulk), contact_(contact), internal_force_(pattern.size()) {
+ContactEquations::ContactEquations(const StiffnessPattern& pattern, BulkOperator& bulk, BulkOperator& elastic,
+                                   const ContactBoundary& contact)
+    : pattern_(pattern), bulk_(&bulk), elastic_(elastic), contact_(contact), internal_force_(pattern.size()) {
   for (const auto& c : contact.candidates()) contact_rows_.push_back(pattern.row_positions(c.equation));
 }
 
@@ -70,108 +74,31 @@ void ContactEquations::jacobian(const double* u, double alpha, double* values) {
   signature_ = signature;
 }
 
-// ---------------------------------------------------------------------------------------------
-// A SUNLinearSolver around SUNLinSol_KLU that keeps KLU's symbolic analysis across KINSol calls.
-//
-// KINSOL calls the linear solver's `initialize` at the start of every KINSol call, and
-// SUNLinSol_KLU's initialize forces a new symbolic analysis and a full factorization
-// (../shared/STACK.md).  The sparsity pattern of this problem never changes, so this wrapper
-// forwards `initialize` only until the first analysis exists; afterwards every setup is a KLU
-// refactorization reusing the symbolic analysis and the previous pivot sequence.  If a
-// refactorization fails (a pivot that was fine became zero) the wrapper analyses and factors
-// afresh, so reuse never costs robustness.  SUNLinSol_KLU itself checks KLU's rcond after a
-// refactorization and factors again when the old pivots have become poor.
-
-namespace {
-
-struct KluWithReuse {
-  sundials::LinearSolver klu;
-  long numeric_factorizations = 0;
-  long symbolic_analyses = 0;
-  bool fresh_numeric = false;  // the next setup factors afresh (new pivots), keeping the analysis
-  bool keep_factor = false;    // the next setup keeps the current factor (a chord step)
-  double condition_estimate = 0.0;  // of the increment's first (fresh) factorization
-
-  static KluWithReuse* self(SUNLinearSolver s) { return static_cast<KluWithReuse*>(s->content); }
-  static SUNLinearSolverContent_KLU klu_content(SUNLinearSolver klu) {
-    return static_cast<SUNLinearSolverContent_KLU>(klu->content);
-  }
-
-  static SUNLinearSolver_Type type(SUNLinearSolver) { return SUNLINEARSOLVER_DIRECT; }
-  static SUNLinearSolver_ID id(SUNLinearSolver) { return SUNLINEARSOLVER_KLU; }
-  // Called by KINSOL at the start of every KINSol call (every increment).  The symbolic analysis
-  // is kept; the first factorization of the increment is a full numeric one with fresh pivoting,
-  // later ones refactor with its pivots.  So an increment's arithmetic depends only on its own
-  // matrices, not on what the previous increment left in KLU: a run resumed from a checkpoint
-  // repeats an uninterrupted run bit for bit.
-  static int initialize(SUNLinearSolver s) {
-    KluWithReuse* me = self(s);
-    if (me->symbolic_analyses == 0) return SUNLinSolInitialize_KLU(me->klu.get());
-    me->fresh_numeric = true;
-    return SUNLS_SUCCESS;
-  }
-  static int setup(SUNLinearSolver s, SUNMatrix a) {
-    KluWithReuse* me = self(s);
-    SUNLinearSolver klu = me->klu.get();
-    SUNLinearSolverContent_KLU content = klu_content(klu);
-    if (me->keep_factor && content->numeric) {
-      me->keep_factor = false;
-      return SUNLS_SUCCESS;
-    }
-    ++me->numeric_factorizations;
-    if (me->fresh_numeric && content->symbolic) {
-      me->fresh_numeric = false;
-      if (content->numeric) sun_klu_free_numeric(&content->numeric, &content->common);
-      content->numeric = sun_klu_factor(SUNSparseMatrix_IndexPointers(a), SUNSparseMatrix_IndexValues(a),
-                                        SUNSparseMatrix_Data(a), content->symbolic, &content->common);
-      content->last_flag = content->numeric ? SUNLS_SUCCESS : SUNLS_PACKAGE_FAIL_REC;
-      if (content->numeric &&
-          sun_klu_condest(SUNSparseMatrix_IndexPointers(a), SUNSparseMatrix_Data(a), content->symbolic,
-                          content->numeric, &content->common))
-        me->condition_estimate = content->common.condest;
-      return content->last_flag;
-    }
-    const bool analyse = content->first_factorize != 0;
-    int flag = SUNLinSolSetup_KLU(klu, a);
-    if (flag != SUNLS_SUCCESS && !analyse) {
-      // A refactorization failed (a pivot that was fine became zero): analyse and factor afresh.
-      content->first_factorize = 1;
-      flag = SUNLinSolSetup_KLU(klu, a);
-      ++me->symbolic_analyses;
-    } else if (analyse) {
-      ++me->symbolic_analyses;
-    }
-    return flag;
-  }
-  static int solve(SUNLinearSolver s, SUNMatrix a, N_Vector x, N_Vector b, realtype tol) {
-    return SUNLinSolSolve_KLU(self(s)->klu.get(), a, x, b, tol);
-  }
-  static sunindextype last_flag(SUNLinearSolver s) { return SUNLinSolLastFlag_KLU(self(s)->klu.get()); }
-  static int free(SUNLinearSolver s) {
-    // The KLU solver is owned by the C++ object; only the shell belongs to SUNDIALS.
-    SUNLinSolFreeEmpty(s);
-    return SUNLS_SUCCESS;
-  }
-};
-
-}  // namespace
+bool ContactEquations::pivot_reference(double* values) {
+  // The linear elastic stiffness (its tangent does not depend on u), no contact row replaced.
+  const std::vector<double> zero(static_cast<std::size_t>(pattern_.size()), 0.0);
+  elastic_.tangent(zero.data(), values);
+  return true;
+}
 
 // ---------------------------------------------------------------------------------------------
 
-// A chord step needs the previous step to have cut the residual by this factor (see above).
+// A chord step needs the previous step to have cut the residual by this factor (see below).
 constexpr double chord_contraction = 1e-2;
 // Residual norms kept per solve (diagnostics and the convergence tests need the first few).
 constexpr std::size_t max_residual_history = 10000;
+// GMRES's Krylov space per Newton iteration (no restarts): with a preconditioner from the same
+// solve it converges in a few iterations; one that needs more is stale and is refreshed.
+constexpr int krylov_dimension = 15;
 
 struct NewtonSolver::Impl {
   IncrementEquations& equations;
   NewtonSettings settings;
   sundials::Context context;
   sundials::Vector u, u_scale, f_scale;
-  sundials::Matrix jacobian;
-  KluWithReuse klu;
-  sundials::LinearSolver klu_shell;       // our SUNLinearSolver around SUNLinSol_KLU
-  std::unique_ptr<CholmodSolver> cholmod;  // or CHOLMOD's supernodal Cholesky
+  sundials::Matrix jacobian;                  // the matrix the direct solver factors (CSC)
+  std::unique_ptr<SparseDirectSolver> direct;  // KLU or CHOLMOD
+  sundials::LinearSolver gmres;               // Krylov solves only
   sundials::KinsolMemory kinsol;
   double alpha = 0.0;
   std::string last_message;
@@ -183,6 +110,10 @@ struct NewtonSolver::Impl {
   bool chord_allowed = false, factored = false;
   std::uint64_t factored_signature = 0;
   double previous_norm = 0.0;
+  // Krylov solves: the Jacobian at the current iterate (for J v), and the preconditioner's age.
+  std::vector<double> jacobian_values, jacobian_point;
+  int preconditioner_setups = 0;  // calls of psetup in this solve
+  long linear_iterations = 0;     // GMRES iterations over all solves
 
   Impl(IncrementEquations& eq, const NewtonSettings& s)
       : equations(eq),
@@ -193,27 +124,14 @@ struct NewtonSolver::Impl {
         jacobian(SUNSparseMatrix(eq.size(), eq.size(), eq.pattern().nonzeros(), CSC_MAT, context)),
         kinsol(context) {
     if (!jacobian) throw std::runtime_error("SUNSparseMatrix failed");
-    SUNLinearSolver linear_solver = nullptr;
     if (settings.linear == LinearSolverKind::cholmod) {
-      cholmod = std::make_unique<CholmodSolver>(context);
-      linear_solver = cholmod->get();
+      direct = std::make_unique<CholmodSolver>(context);
     } else {
-      klu.klu.reset(SUNLinSol_KLU(u.get(), jacobian.get(), context));
-      if (!klu.klu) throw std::runtime_error("SUNLinSol_KLU failed");
-      // AMD fill-reducing ordering: 2-3x faster with less fill than KLU's default COLAMD on
-      // finite-element matrices (../shared/STACK.md).
-      sundials::check(SUNLinSol_KLUSetOrdering(klu.klu.get(), 0), "SUNLinSol_KLUSetOrdering");
-      klu_shell.reset(SUNLinSolNewEmpty(context));
-      if (!klu_shell) throw std::runtime_error("SUNLinSolNewEmpty failed");
-      linear_solver = klu_shell.get();
-      linear_solver->content = &klu;
-      linear_solver->ops->gettype = KluWithReuse::type;
-      linear_solver->ops->getid = KluWithReuse::id;
-      linear_solver->ops->initialize = KluWithReuse::initialize;
-      linear_solver->ops->setup = KluWithReuse::setup;
-      linear_solver->ops->solve = KluWithReuse::solve;
-      linear_solver->ops->lastflag = KluWithReuse::last_flag;
-      linear_solver->ops->free = KluWithReuse::free;
+      auto klu = std::make_unique<KluSolver>(context);
+      std::vector<double> reference(static_cast<std::size_t>(eq.pattern().nonzeros()));
+      if (equations.pivot_reference(reference.data()))
+        klu->analyse(eq.pattern().column_start(), eq.pattern().row_index(), std::move(reference));
+      direct = std::move(klu);
     }
 
     N_VConst(1.0 / settings.displacement_scale, u_scale.get());
@@ -222,11 +140,21 @@ struct NewtonSolver::Impl {
     sundials::check(KINInit(kinsol, residual_callback, u.get()), "KINInit");
     sundials::check(KINSetUserData(kinsol, this), "KINSetUserData");
     sundials::check(KINSetErrHandlerFn(kinsol, error_callback, this), "KINSetErrHandlerFn");
-    sundials::check(KINSetLinearSolver(kinsol, linear_solver, jacobian.get()), "KINSetLinearSolver");
-    sundials::check(KINSetJacFn(kinsol, jacobian_callback), "KINSetJacFn");
-    // Exact (semi-smooth) Newton: a fresh Jacobian every iteration.  The active set can change
-    // at any iteration, and a stale Jacobian would carry the wrong contact rows.
-    sundials::check(KINSetMaxSetupCalls(kinsol, 1), "KINSetMaxSetupCalls");
+    if (settings.newton_linear == NewtonLinearSolve::krylov) {
+      gmres.reset(SUNLinSol_SPGMR(u.get(), SUN_PREC_RIGHT, krylov_dimension, context));
+      if (!gmres) throw std::runtime_error("SUNLinSol_SPGMR failed");
+      sundials::check(KINSetLinearSolver(kinsol, gmres.get(), nullptr), "KINSetLinearSolver");
+      sundials::check(KINSetPreconditioner(kinsol, preconditioner_setup, preconditioner_solve), "KINSetPreconditioner");
+      sundials::check(KINSetJacTimesVecFn(kinsol, jacobian_times_vector), "KINSetJacTimesVecFn");
+      // psetup is offered every iteration; it decides itself whether to factor.
+      sundials::check(KINSetMaxSetupCalls(kinsol, 1), "KINSetMaxSetupCalls");
+    } else {
+      sundials::check(KINSetLinearSolver(kinsol, direct->get(), jacobian.get()), "KINSetLinearSolver");
+      sundials::check(KINSetJacFn(kinsol, jacobian_callback), "KINSetJacFn");
+      // Exact (semi-smooth) Newton: a fresh Jacobian every iteration.  The active set can change
+      // at any iteration, and a stale Jacobian would carry the wrong contact rows.
+      sundials::check(KINSetMaxSetupCalls(kinsol, 1), "KINSetMaxSetupCalls");
+    }
     sundials::check(KINSetNumMaxIters(kinsol, settings.max_iterations), "KINSetNumMaxIters");
     sundials::check(KINSetFuncNormTol(kinsol, settings.tolerance), "KINSetFuncNormTol");
     // Convergence is judged on the residual only: a tiny step is not success.
@@ -236,55 +164,107 @@ struct NewtonSolver::Impl {
     sundials::check(KINSetMaxNewtonStep(kinsol, 1e30), "KINSetMaxNewtonStep");
   }
 
+  static double max_norm(N_Vector v) {
+    const double* x = N_VGetArrayPointer(v);
+    double norm = 0.0;
+    for (sunindextype i = 0; i < N_VGetLength(v); ++i) norm = std::max(norm, std::abs(x[i]));
+    return norm;
+  }
+
   static int residual_callback(N_Vector u, N_Vector f, void* data) {
     // A stop requested from outside (SIGINT/SIGTERM) ends this solve at once (unrecoverable for
     // KINSOL); the simulation then returns to its last converged increment.
     if (interruption_requested()) return -1;
     auto* me = static_cast<Impl*>(data);
-    double* values = N_VGetArrayPointer(f);
-    me->equations.residual(N_VGetArrayPointer(u), me->alpha, values);
-    double norm = 0.0;
-    for (sunindextype i = 0; i < N_VGetLength(f); ++i) norm = std::max(norm, std::abs(values[i]));
+    me->equations.residual(N_VGetArrayPointer(u), me->alpha, N_VGetArrayPointer(f));
     // Bounded: a solve that never converges must not grow memory without end.
-    if (me->residual_history.size() < max_residual_history) me->residual_history.push_back(norm / me->settings.force_scale);
+    if (me->residual_history.size() < max_residual_history)
+      me->residual_history.push_back(max_norm(f) / me->settings.force_scale);
     return 0;
+  }
+
+  // The fixed pattern and the Jacobian's values at u into the matrix the direct solver factors.
+  // KINSOL zeroes the whole matrix it hands to jacobian_callback, index arrays included, before
+  // each call (STACK.md): the pattern is written back every time.
+  void write_pattern(SUNMatrix j) const {
+    const auto& pattern = equations.pattern();
+    std::copy(pattern.column_start().begin(), pattern.column_start().end(), SUNSparseMatrix_IndexPointers(j));
+    std::copy(pattern.row_index().begin(), pattern.row_index().end(), SUNSparseMatrix_IndexValues(j));
+  }
+
+  // A cycling active set stops the plain attempt (recoverable): the caller repeats the trial with
+  // KINSOL's line search, whose damped steps break the cycle, and cuts the increment back only if
+  // that fails too.  True when the solve must stop.
+  bool cycles(double norm) {
+    if (active_sets.record(equations.active_set_signature(), norm) && stop_on_cycling) {
+      cycling = true;
+      return true;
+    }
+    return false;
   }
 
   static int jacobian_callback(N_Vector u, N_Vector fu, SUNMatrix j, void* data, N_Vector, N_Vector) {
     auto* me = static_cast<Impl*>(data);
-    // KINSOL zeroes the whole matrix, index arrays included, before each call (STACK.md):
-    // write the fixed pattern back every time.
-    const auto& pattern = me->equations.pattern();
-    std::copy(pattern.column_start().begin(), pattern.column_start().end(), SUNSparseMatrix_IndexPointers(j));
-    std::copy(pattern.row_index().begin(), pattern.row_index().end(), SUNSparseMatrix_IndexValues(j));
+    me->write_pattern(j);
     me->equations.jacobian(N_VGetArrayPointer(u), me->alpha, SUNSparseMatrix_Data(j));
-    // A cycling active set stops the plain attempt (recoverable): the caller repeats the trial
-    // with KINSOL's line search, whose damped steps break the cycle, and cuts the increment back
-    // only if that fails too.
-    const double* f = N_VGetArrayPointer(fu);
-    double norm = 0.0;
-    for (sunindextype i = 0; i < N_VGetLength(fu); ++i) norm = std::max(norm, std::abs(f[i]));
-    const std::uint64_t signature = me->equations.active_set_signature();
-    if (me->active_sets.record(signature, norm) && me->stop_on_cycling) {
-      me->cycling = true;
-      return 1;
-    }
+    const double norm = max_norm(fu);
+    if (me->cycles(norm)) return 1;
     // Chord step: keep the last factor (KINSOL still gets the fresh Jacobian, for its line search
     // and norms) when the active set is the one factored and the last step cut the residual by
     // chord_contraction or better -- the iteration is then in Newton's quadratic range, where the
     // Jacobian has changed by O(|du|) and the old factor contracts almost as well.  A chord step
     // that contracts less is followed by a fresh factorization.  Only this solve's history
     // decides, so a resumed run repeats the same steps.
+    const std::uint64_t signature = me->equations.active_set_signature();
     const bool chord = me->chord_allowed && me->factored && signature == me->factored_signature &&
                        norm <= chord_contraction * me->previous_norm;
     me->previous_norm = norm;
     if (chord) {
-      if (me->cholmod) me->cholmod->keep_factor_once();
-      else me->klu.keep_factor = true;
+      me->direct->keep_factor_once();
     } else {
       me->factored = true;
       me->factored_signature = signature;
     }
+    return 0;
+  }
+
+  // Krylov solves.  The Jacobian at `point`, kept for J v until the iterate moves.
+  void jacobian_at(const double* point) {
+    const std::size_t n = static_cast<std::size_t>(equations.size());
+    if (jacobian_point.size() == n && std::equal(jacobian_point.begin(), jacobian_point.end(), point)) return;
+    jacobian_values.resize(static_cast<std::size_t>(equations.pattern().nonzeros()));
+    equations.jacobian(point, alpha, jacobian_values.data());
+    jacobian_point.assign(point, point + n);
+  }
+
+  // KINSOL offers a preconditioner setup at every iteration.  The solve's first iterate is always
+  // factored -- so each increment's arithmetic depends on its own state alone, and a resumed run
+  // repeats the uninterrupted one bit for bit -- and so is the second: the first step, from the
+  // predictor, moves the contact set and the yield front, after which the Jacobian changes little.
+  // Later iterates are factored only when the last GMRES solve stopped short of its tolerance
+  // (the Krylov space of krylov_dimension was not enough: the preconditioner has gone stale).
+  static int preconditioner_setup(N_Vector uu, N_Vector, N_Vector fu, N_Vector, void* data) {
+    auto* me = static_cast<Impl*>(data);
+    me->jacobian_at(N_VGetArrayPointer(uu));
+    if (me->cycles(max_norm(fu))) return 1;
+    const int call = me->preconditioner_setups++;
+    const bool stale = SUNLinSolLastFlag(me->gmres.get()) == SUNLS_RES_REDUCED;
+    if (call >= 2 && !stale) return 0;
+    SUNMatrix j = me->jacobian.get();
+    me->write_pattern(j);
+    std::copy(me->jacobian_values.begin(), me->jacobian_values.end(), SUNSparseMatrix_Data(j));
+    return SUNLinSolSetup(me->direct->get(), j) == SUNLS_SUCCESS ? 0 : 1;
+  }
+
+  static int preconditioner_solve(N_Vector, N_Vector, N_Vector, N_Vector, N_Vector v, void* data) {
+    auto* me = static_cast<Impl*>(data);
+    return SUNLinSolSolve(me->direct->get(), me->jacobian.get(), v, v, 0.0) == SUNLS_SUCCESS ? 0 : 1;
+  }
+
+  static int jacobian_times_vector(N_Vector v, N_Vector jv, N_Vector uu, sunbooleantype*, void* data) {
+    auto* me = static_cast<Impl*>(data);
+    me->jacobian_at(N_VGetArrayPointer(uu));
+    me->equations.pattern().multiply(me->jacobian_values, N_VGetArrayPointer(v), N_VGetArrayPointer(jv));
     return 0;
   }
 
@@ -322,7 +302,10 @@ NewtonReport NewtonSolver::solve(double alpha, std::vector<double>& u, Globaliza
   m.chord_allowed = m.settings.chord_steps && globalization == Globalization::none;
   m.factored = false;
   m.previous_norm = 0.0;
-  m.klu.keep_factor = false;
+  m.direct->clear_keep_factor();
+  m.direct->estimate_condition_at_next_setup();
+  m.preconditioner_setups = 0;
+  m.jacobian_point.clear();  // the depth changed: so does the Jacobian at the same u
   const long factorizations_before = total_factorizations();
   const long analyses_before = total_symbolic_analyses();
 
@@ -332,10 +315,16 @@ NewtonReport NewtonSolver::solve(double alpha, std::vector<double>& u, Globaliza
   long iterations = 0;
   KINGetNumNonlinSolvIters(m.kinsol, &iterations);
   report.iterations = iterations;
+  if (m.gmres) {
+    long linear = 0;
+    KINGetNumLinIters(m.kinsol, &linear);
+    report.linear_iterations = linear;
+    m.linear_iterations += linear;
+  }
   report.factorizations = total_factorizations() - factorizations_before;
   report.symbolic_analyses = total_symbolic_analyses() - analyses_before;
   report.residual = m.scaled_residual(data);
-  report.condition_estimate = m.cholmod ? m.cholmod->condition_estimate() : m.klu.condition_estimate;
+  report.condition_estimate = m.direct->condition_estimate();
   // Trust the residual, not the return code alone: KIN_STEP_LT_STPTOL and friends are not
   // convergence, and a success must really satisfy the tolerance.
   report.converged = report.kinsol_flag >= 0 && report.residual <= m.settings.tolerance;
@@ -355,15 +344,12 @@ void NewtonSolver::solve_linearized(const std::vector<double>& u, double alpha,
   std::vector<double> f(n);
   m.equations.residual(u.data(), alpha, f.data());
   SUNMatrix j = m.jacobian.get();
-  const auto& pattern = m.equations.pattern();
-  std::copy(pattern.column_start().begin(), pattern.column_start().end(), SUNSparseMatrix_IndexPointers(j));
-  std::copy(pattern.row_index().begin(), pattern.row_index().end(), SUNSparseMatrix_IndexValues(j));
+  m.write_pattern(j);
   m.equations.jacobian(u.data(), alpha, SUNSparseMatrix_Data(j));
   // A chord step's request to keep the factor may be pending from the converged solve: this
   // matrix must be factored.
-  m.klu.keep_factor = false;
-  if (m.cholmod) m.cholmod->clear_keep_factor();
-  SUNLinearSolver solver = m.cholmod ? m.cholmod->get() : m.klu_shell.get();
+  m.direct->clear_keep_factor();
+  SUNLinearSolver solver = m.direct->get();
   if (SUNLinSolSetup(solver, j) != SUNLS_SUCCESS) throw SolverError("the sensitivity system could not be factored");
   sundials::Vector x = sundials::make_serial_vector(static_cast<sunindextype>(n), m.context);
   sundials::Vector b = sundials::make_serial_vector(static_cast<sunindextype>(n), m.context);
@@ -377,11 +363,8 @@ void NewtonSolver::solve_linearized(const std::vector<double>& u, double alpha,
   }
 }
 
-long NewtonSolver::total_factorizations() const {
-  return impl_->cholmod ? impl_->cholmod->numeric_factorizations() : impl_->klu.numeric_factorizations;
-}
-long NewtonSolver::total_symbolic_analyses() const {
-  return impl_->cholmod ? impl_->cholmod->symbolic_analyses() : impl_->klu.symbolic_analyses;
-}
+long NewtonSolver::total_factorizations() const { return impl_->direct->numeric_factorizations(); }
+long NewtonSolver::total_symbolic_analyses() const { return impl_->direct->symbolic_analyses(); }
+long NewtonSolver::total_linear_iterations() const { return impl_->linear_iterations; }
 
 }  // namespace indentsim
