@@ -76,6 +76,11 @@ TEST(ActiveSetCycling, ReturningToAnEarlierSetWithoutProgressIsACycle) {
   EXPECT_FALSE(h.record(1, 1.0));
   EXPECT_FALSE(h.record(2, 0.5));
   EXPECT_FALSE(h.record(1, 0.01));  // a node flipped back, but the residual fell 100x: progress
+  h.clear();
+  EXPECT_FALSE(h.record(1, 2.4e-2));
+  EXPECT_FALSE(h.record(2, 6.5e-4));
+  EXPECT_FALSE(h.record(1, 6.3e-3));  // an overshoot at the contact edge, at a quarter of the first visit
+  EXPECT_TRUE(h.record(2, 6.0e-4));   // ... but coming back to set 2 without halving its residual cycles
 }
 
 // worker_threads.hpp: after a run, OpenBLAS (Debian's pthreads build, which CHOLMOD calls) runs

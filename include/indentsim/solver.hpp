@@ -19,7 +19,7 @@ namespace indentsim {
 
 /// Active-set cycling guard of one Newton solve: the contact sets seen at successive Jacobians,
 /// with the residual norm at each.  Staying on a set is convergence; coming back to a set left
-/// earlier (A, B, A) while the residual has not fallen to a tenth of what it was at the earlier
+/// earlier (A, B, A) while the residual has not fallen to half of what it was at the earlier
 /// visit is a cycle, which semi-smooth Newton would repeat forever.  (Coupled with plasticity,
 /// a node may flip back once on the way to convergence; then the residual has dropped.)
 class ActiveSetHistory {

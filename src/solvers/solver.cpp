@@ -42,11 +42,17 @@ void ContactEquations::residual(const double* u, double alpha, double* f) {
   }
 }
 
+// Coming back to an earlier contact set counts as a cycle unless the residual has at least halved
+// since that visit.  Semi-smooth Newton often overshoots once at the contact edge on its way
+// (A, B, A at a quarter of the first residual, deep_plastic.toml's early increments); stopping
+// there repeated the whole solve with the line search, and a true cycle repeats its residual.
+constexpr double cycle_contraction = 0.5;
+
 bool ActiveSetHistory::record(std::uint64_t signature, double residual) {
   bool cycle = false;
   if (!seen_.empty() && seen_.back().first != signature)
     for (std::size_t k = 0; k + 1 < seen_.size(); ++k)
-      if (seen_[k].first == signature && residual > 0.1 * seen_[k].second) cycle = true;
+      if (seen_[k].first == signature && residual > cycle_contraction * seen_[k].second) cycle = true;
   seen_.emplace_back(signature, residual);
   return cycle;
 }
