@@ -46,6 +46,23 @@ TEST(PlasticContact, NewtonConvergesQuadraticallyNearTheSolution) {
   EXPECT_EQ(checked, 5);
 }
 
+TEST(PlasticContact, TheFirstIncrementStartsFromTheElasticContactSolution) {
+  // From the unloaded state there is nothing to extrapolate: the first increment starts from the
+  // elastic contact solution at its depth (Simulation::predict), and the plastic Newton from there
+  // converges in its first, undamped attempt.  Started from u = 0, the plain attempt ran out of
+  // its 12 iterations and the line search began again (19-21 iterations in all here, against 9-10;
+  // 30 at contact_nodes 30).
+  for (const char* jacobian : {"krylov", "reuse"}) {
+    SCOPED_TRACE(jacobian);
+    Simulation sim(shipped_case("deep_plastic.toml", {"mesh.contact_nodes=20", std::string("solver.jacobian=") + jacobian}));
+    sim.advance_to(0.0);
+    const IncrementRecord first = sim.advance_to(sim.load_case().max_depth() / 12);
+    ASSERT_GT(first.plastic_points, 0);
+    EXPECT_EQ(first.cutbacks, 0);
+    EXPECT_LE(first.newton_iterations, 14) << "the plain attempt did not converge";
+  }
+}
+
 TEST(PlasticContact, DeformationTheoryIsPathIndependentOnMonotoneLoading) {
   Simulation few(shipped_case("power_law.toml", {"mesh.contact_nodes=8", "load.increments=5"}));
   Simulation many(shipped_case("power_law.toml", {"mesh.contact_nodes=8", "load.increments=50"}));

@@ -356,13 +356,15 @@ void Simulation::commit(double trial) {
 }
 
 void Simulation::predict(double trial, long& iterations, long& factorizations) {
-  if (has_previous_) extrapolate(u_previous_, alpha_previous_, u_, alpha_, trial, guess_);
+  // The first increment into a virgin specimen has nothing to extrapolate: its previous states
+  // are the unloaded one (alpha = 0), so the secant would predict no displacement at all.
+  const bool virgin = deepest_ <= 0.0;
+  if (has_previous_ && !virgin) extrapolate(u_previous_, alpha_previous_, u_, alpha_, trial, guess_);
   else guess_ = u_;
   to_system(guess_, system_guess_);
-  if (has_previous_ || !plastic_) return;
-  // No history to extrapolate (the first increment): the elastic contact solution at the same
-  // depth settles the contact set before plasticity enters, which the coupled Newton otherwise
-  // has to find through the kinks of both at once.
+  if (!virgin || !plastic_) return;
+  // The elastic contact solution at the same depth settles the contact set before plasticity
+  // enters, which the coupled Newton otherwise has to find through the kinks of both at once.
   equations_->use_bulk(system_elastic_bulk());
   const NewtonReport elastic = newton_->solve(trial, system_guess_);
   equations_->use_bulk(system_bulk());
