@@ -121,8 +121,6 @@ struct J2Response {
 class J2Law {
 public:
   explicit J2Law(const IlyushinLaw& curve);
-  /// Yield stress and hardening modulus d sigma_y / d eps_p at equivalent plastic strain eps_p.
-  double yield_stress(double equivalent_plastic_strain, double* hardening_modulus = nullptr) const;
   /// Stress at total strain `strain` from the committed history `old`.
   J2Response respond(const VoigtVector& strain, const J2State& old) const;
   const IlyushinLaw& curve() const { return curve_; }

@@ -119,32 +119,6 @@ std::optional<std::string> IlyushinLaw::admissibility_violation() const {
 J2Law::J2Law(const IlyushinLaw& curve)
     : curve_(curve), bulk_(curve.lame().lambda + 2.0 * curve.lame().mu / 3.0), mu_(curve.lame().mu) {}
 
-double J2Law::yield_stress(double eps_p, double* hardening_modulus) const {
-  // Invert eps_p = e_u omega(e_u) for e_u >= e0 (monotone: its derivative lies in (0, 1)).
-  const double e0 = curve_.elastic_limit();
-  double e_u = e0;
-  if (eps_p > 0.0) {
-    e_u = e0 + eps_p;  // eps_p <= e_u - e0 since d(e_u omega)/de_u < 1: a lower bound
-    for (int it = 0; it < 100; ++it) {
-      const double g = e_u * curve_.omega(e_u) - eps_p;
-      const double dg = curve_.omega(e_u) + e_u * curve_.omega_derivative(e_u);
-      const double next = std::max(e0 * (1 + 1e-15), e_u - g / dg);
-      if (std::abs(next - e_u) <= 1e-15 * e_u) {
-        e_u = next;
-        break;
-      }
-      e_u = next;
-    }
-  }
-  if (hardening_modulus) {
-    // H = (d sigma_u / d e_u) / (d eps_p / d e_u) = 3 mu (1 - d) / d with d = d(e_u omega)/de_u.
-    const double e = std::max(e_u, e0 * (1 + 1e-12));
-    const double d = curve_.omega(e) + e * curve_.omega_derivative(e);
-    *hardening_modulus = 3.0 * mu_ * (1.0 - d) / d;
-  }
-  return curve_.stress_intensity(e_u);
-}
-
 J2Response J2Law::respond(const VoigtVector& strain, const J2State& old) const {
   J2Response r;
   r.state = old;
@@ -158,24 +132,26 @@ J2Response J2Law::respond(const VoigtVector& strain, const J2State& old) const {
   const Eigen::Vector4d trial = 2.0 * mu_ * (e - old.plastic_strain);
   const double trial_norm = tensor_norm(trial);
   const double trial_equivalent = std::sqrt(1.5) * trial_norm;
-  double hardening = 0.0;
-  const double yield = yield_stress(old.equivalent_plastic_strain, &hardening);
+
+  // Radial return, sigma_eq_trial - 3 mu dgamma = sigma_y(eps_p + dgamma), in closed form.  The
+  // hardening curve is Ilyushin's sigma_u(e_u) = 3 mu e_u (1 - omega(e_u)) with the plastic strain
+  // eps_p(e_u) = e_u omega(e_u) (the total intensity less the elastic part sigma_u / 3 mu), so with
+  // e_u the intensity at the end of the step, sigma_y = 3 mu (e_u - eps_p_old - dgamma) and the
+  // return equation becomes linear in e_u: e_u = sigma_eq_trial / (3 mu) + eps_p_old.  (Iterating
+  // on dgamma instead needs eps_p -> e_u inverted at every iterate: a nested Newton, and most of
+  // a J2 run's time under a power law's pow().)  The point yields when that e_u carries more
+  // plastic strain than the history: e_u omega(e_u) > eps_p_old.
+  const double e_u = trial_equivalent / (3.0 * mu_) + old.equivalent_plastic_strain;
+  const double omega = e_u > curve_.elastic_limit() ? curve_.omega(e_u) : 0.0;
+  const double dgamma = e_u * omega - old.equivalent_plastic_strain;
 
   Eigen::Vector4d deviator = trial;
   double theta = 1.0, theta_bar = 0.0;
   Eigen::Vector4d n = Eigen::Vector4d::Zero();
-  if (trial_equivalent > yield * (1.0 + 1e-14)) {
-    // Radial return: sigma_eq_trial - 3 mu dgamma - sigma_y(eps_p + dgamma) = 0.
-    double dgamma = 0.0;
-    for (int it = 0; it < 100; ++it) {
-      double h = 0.0;
-      const double residual = trial_equivalent - 3.0 * mu_ * dgamma - yield_stress(old.equivalent_plastic_strain + dgamma, &h);
-      const double step = residual / (3.0 * mu_ + h);
-      dgamma += step;
-      hardening = h;
-      if (std::abs(step) <= 1e-15 * (old.equivalent_plastic_strain + dgamma) + 1e-300) break;
-    }
-    yield_stress(old.equivalent_plastic_strain + dgamma, &hardening);
+  if (dgamma > 1e-14 * e_u) {
+    // H = (d sigma_u / d e_u) / (d eps_p / d e_u) = 3 mu (1 - d) / d with d = d(e_u omega)/de_u.
+    const double d = omega + e_u * curve_.omega_derivative(e_u);
+    const double hardening = 3.0 * mu_ * (1.0 - d) / d;
     n = trial / trial_norm;
     deviator = trial - 2.0 * mu_ * std::sqrt(1.5) * dgamma * n;
     r.state.plastic_strain += std::sqrt(1.5) * dgamma * n;

@@ -88,7 +88,7 @@ void IlyushinPointLaw::restore(const std::vector<double>& h) {
 
 // ---------------------------------------------------------------------------------------------
 J2PointLaw::J2PointLaw(const J2Law& law, std::size_t points)
-    : law_(law), initial_yield_(law.yield_stress(0.0)), state_(points) {}
+    : law_(law), initial_yield_(law.curve().stress_intensity(law.curve().elastic_limit())), state_(points) {}
 
 bool J2PointLaw::elastic(std::size_t point, const VoigtVector& strain) const {
   if (state_[point].equivalent_plastic_strain > 0.0) return false;
