@@ -82,3 +82,22 @@ TEST(Element, BbarIsSymmetricKeepsRigidBodyModesAndAgreesOnUniformDilatation) {
     EXPECT_LE((plain - bar).norm(), 1e-14 * plain.norm());
   }
 }
+
+// An element pass asks for the four Gauss points' B at once (B-bar's mean formed once): it must be
+// the pointwise B of each point, for both kinematics, both elements, and rings far from and next
+// to the axis.
+TEST(Kinematics, TheFourPointsAtOnceArePointwiseB) {
+  const PlaneStrain plane;
+  const Axisymmetric axisymmetric;
+  for (const Kinematics* kinematics : {static_cast<const Kinematics*>(&plane), static_cast<const Kinematics*>(&axisymmetric)})
+    for (ElementKind kind : {ElementKind::q1, ElementKind::bbar})
+      for (const Rectangle& rect : {Rectangle{1e-4, 2e-4, 0.0}, Rectangle{5e-4, 1e-4, 3e-3}}) {
+        const std::array<StrainDisplacement, 4> at_once = kinematics->gauss_point_strain_displacements(rect, kind);
+        const auto& points = gauss_points_2x2();
+        for (std::size_t g = 0; g < points.size(); ++g) {
+          const StrainDisplacement b = kinematics->strain_displacement(rect, points[g].xi, points[g].eta, kind);
+          EXPECT_LE((at_once[g] - b).cwiseAbs().maxCoeff(), 1e-12 * b.cwiseAbs().maxCoeff())
+              << kinematics->name() << " point " << g;
+        }
+      }
+}

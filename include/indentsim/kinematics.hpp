@@ -29,6 +29,10 @@ public:
   /// B at (xi, eta) of the rectangle: (eps11, eps22, gamma12, eps33) = B ue (B-bar for bbar).
   virtual StrainDisplacement strain_displacement(const Rectangle& rect, double xi, double eta,
                                                  ElementKind kind) const = 0;
+  /// B at the four points of gauss_points_2x2(), in that order: what an element pass needs, in
+  /// one call (B-bar's mean dilatation is then formed once, not once per point).
+  virtual std::array<StrainDisplacement, 4> gauss_point_strain_displacements(const Rectangle& rect,
+                                                                            ElementKind kind) const;
   /// The body a unit quadrature weight at abscissa xi stands for: the area (plane strain, per
   /// unit thickness) or the ring volume 2 pi r area (axisymmetry).
   virtual double measure(const Rectangle& rect, double xi) const = 0;
@@ -86,6 +90,8 @@ class Axisymmetric final : public Kinematics {
 public:
   SceneKind kind() const override { return SceneKind::axisymmetric; }
   StrainDisplacement strain_displacement(const Rectangle& rect, double xi, double eta, ElementKind kind) const override;
+  std::array<StrainDisplacement, 4> gauss_point_strain_displacements(const Rectangle& rect,
+                                                                    ElementKind kind) const override;
   double measure(const Rectangle& rect, double xi) const override;
   bool position_dependent() const override { return true; }
   double symmetry_factor() const override { return 1.0; }

@@ -32,14 +32,21 @@ ElementMatrix Kinematics::elastic_stiffness(const Rectangle& rect, const LameCon
   return stiffness(rect, isotropic_stiffness(lame), kind);
 }
 
+std::array<StrainDisplacement, 4> Kinematics::gauss_point_strain_displacements(const Rectangle& rect,
+                                                                               ElementKind kind) const {
+  const auto& points = gauss_points_2x2();
+  std::array<StrainDisplacement, 4> b;
+  for (std::size_t g = 0; g < points.size(); ++g) b[g] = strain_displacement(rect, points[g].xi, points[g].eta, kind);
+  return b;
+}
+
 ElementMatrix Kinematics::stiffness(const Rectangle& rect, const std::array<ConstitutiveMatrix, 4>& d,
                                     ElementKind kind) const {
   ElementMatrix k = ElementMatrix::Zero();
   const auto& points = gauss_points_2x2();
-  for (std::size_t g = 0; g < points.size(); ++g) {
-    const StrainDisplacement b = strain_displacement(rect, points[g].xi, points[g].eta, kind);
-    k.noalias() += (points[g].weight * measure(rect, points[g].xi)) * b.transpose() * d[g] * b;
-  }
+  const std::array<StrainDisplacement, 4> b = gauss_point_strain_displacements(rect, kind);
+  for (std::size_t g = 0; g < points.size(); ++g)
+    k.noalias() += (points[g].weight * measure(rect, points[g].xi)) * b[g].transpose() * d[g] * b[g];
   return k;
 }
 
@@ -47,10 +54,9 @@ ElementVector Kinematics::internal_force(const Rectangle& rect, const std::array
                                          ElementKind kind) const {
   ElementVector f = ElementVector::Zero();
   const auto& points = gauss_points_2x2();
-  for (std::size_t g = 0; g < points.size(); ++g) {
-    const StrainDisplacement b = strain_displacement(rect, points[g].xi, points[g].eta, kind);
-    f.noalias() += (points[g].weight * measure(rect, points[g].xi)) * b.transpose() * stress[g];
-  }
+  const std::array<StrainDisplacement, 4> b = gauss_point_strain_displacements(rect, kind);
+  for (std::size_t g = 0; g < points.size(); ++g)
+    f.noalias() += (points[g].weight * measure(rect, points[g].xi)) * b[g].transpose() * stress[g];
   return f;
 }
 
@@ -104,6 +110,29 @@ StrainDisplacement Axisymmetric::strain_displacement(const Rectangle& rect, doub
     b.row(0) += shift;
     b.row(1) += shift;
     b.row(3) += shift;
+  }
+  return b;
+}
+
+std::array<StrainDisplacement, 4> Axisymmetric::gauss_point_strain_displacements(const Rectangle& rect,
+                                                                                 ElementKind kind) const {
+  // As strain_displacement at each point, with the element's mean dilatation formed once.
+  const auto& points = gauss_points_2x2();
+  std::array<StrainDisplacement, 4> b;
+  for (std::size_t g = 0; g < points.size(); ++g) b[g] = axisymmetric_q1(rect, points[g].xi, points[g].eta);
+  if (kind != ElementKind::bbar) return b;
+  Eigen::Matrix<double, 1, 8> mean = Eigen::Matrix<double, 1, 8>::Zero();
+  double volume = 0.0;
+  for (std::size_t g = 0; g < points.size(); ++g) {
+    const double w = points[g].weight * measure(rect, points[g].xi);
+    mean += w * (b[g].row(0) + b[g].row(1) + b[g].row(3));
+    volume += w;
+  }
+  for (StrainDisplacement& bg : b) {
+    const Eigen::Matrix<double, 1, 8> shift = (mean / volume - (bg.row(0) + bg.row(1) + bg.row(3))) / 3.0;
+    bg.row(0) += shift;
+    bg.row(1) += shift;
+    bg.row(3) += shift;
   }
   return b;
 }

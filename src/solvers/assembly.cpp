@@ -176,11 +176,10 @@ std::array<VoigtVector, 4> gauss_point_strains(const Mesh& mesh, int ei, int ej,
 }
 
 std::array<VoigtVector, 4> gauss_point_strains(const Mesh& mesh, int ei, int ej, const ElementVector& ue) {
-  const Rectangle rect = mesh.rectangle(ei, ej);
-  const auto& points = gauss_points_2x2();
+  const std::array<StrainDisplacement, 4> b =
+      mesh.kinematics().gauss_point_strain_displacements(mesh.rectangle(ei, ej), mesh.element_kind());
   std::array<VoigtVector, 4> strains;
-  for (std::size_t g = 0; g < points.size(); ++g)
-    strains[g] = mesh.kinematics().strain_displacement(rect, points[g].xi, points[g].eta, mesh.element_kind()) * ue;
+  for (std::size_t g = 0; g < b.size(); ++g) strains[g] = b[g] * ue;
   return strains;
 }
 
