@@ -4,11 +4,15 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
+#include <iterator>
 #include <string>
+#include <thread>
 
 #include <gtest/gtest.h>
 
 #include "indentsim/simulation.hpp"
+#include "indentsim/worker_threads.hpp"
 #include "test_support.hpp"
 
 using namespace indentsim;
@@ -105,4 +109,22 @@ TEST(LinearSolvers, CholmodCallsOpenBlas) {
     ASSERT_NE(dladdr(symbol, &info), 0);
     EXPECT_NE(std::string(info.dli_fname).find("openblas"), std::string::npos) << info.dli_fname;
   }
+}
+
+// worker_threads.hpp: the CLI stops OpenBLAS's idle workers at its start (they would spin through
+// the run); afterwards the BLAS still serves CHOLMOD on the calling thread.
+TEST(LinearSolvers, IdleOpenBlasWorkersStopAndTheBlasStillServesCholmod) {
+  if (!dlsym(RTLD_DEFAULT, "blas_thread_shutdown_")) GTEST_SKIP() << "no OpenBLAS pthreads build in this process";
+  if (const char* asked = std::getenv("OPENBLAS_NUM_THREADS"); asked && std::atoi(asked) > 1)
+    GTEST_SKIP() << "the environment asks for BLAS threads";
+  const auto threads = [] {
+    return std::distance(std::filesystem::directory_iterator("/proc/self/task"), std::filesystem::directory_iterator{});
+  };
+  const auto before = threads();
+  EXPECT_TRUE(stop_idle_blas_workers());
+  if (std::thread::hardware_concurrency() > 1) EXPECT_LT(threads(), before);  // one worker per further core
+  const auto cholmod = curve("elastic.toml", {"mesh.contact_nodes=6", "solver.linear=cholmod"});
+  const auto klu = curve("elastic.toml", {"mesh.contact_nodes=6", "solver.linear=klu"});
+  ASSERT_EQ(cholmod.size(), klu.size());
+  for (std::size_t k = 0; k < klu.size(); ++k) EXPECT_NEAR(cholmod[k].force, klu[k].force, 1e-9 * klu.back().force);
 }

@@ -37,6 +37,7 @@
 #include "indentsim/sweep.hpp"
 #include "indentsim/sweep_results.hpp"
 #include "indentsim/version.hpp"
+#include "indentsim/worker_threads.hpp"
 
 namespace fs = std::filesystem;
 using namespace indentsim;
@@ -376,6 +377,7 @@ int command_keys(bool markdown) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  stop_idle_blas_workers();  // one thread of our own: OpenBLAS's idle workers only spin (worker_threads.hpp)
   CLI::App app{"indentsim: indentation of an elasto-plastic specimen by a rigid punch (plane strain or axisymmetric; "
                "sphere, cone, flat or measured profile)"};
   app.require_subcommand(1);

@@ -43,4 +43,10 @@ int limit_library_threads() {
   return blas_threads;
 }
 
+bool stop_idle_blas_workers() {
+  if (limit_library_threads() != 1) return false;
+  const auto shutdown = find<int (*)()>("blas_thread_shutdown_");
+  return shutdown && shutdown() == 0;
+}
+
 }  // namespace indentsim
