@@ -186,7 +186,7 @@ FarFieldCondensation::FarFieldCondensation(const ElasticStiffness& stiffness, co
                                            cm->status));
 
     // K_red(B, B) -= K_BF K_FF^{-1} K_FB, a block of interface columns at a time.
-    const std::size_t width = schur_block_columns(far_count);
+    const std::size_t width = std::min(schur_block_columns(far_count), interface_count);
     std::vector<double> block(far_count * width);
     for (std::size_t first = 0; first < interface_count; first += width) {
       const std::size_t count = std::min(width, interface_count - first);
