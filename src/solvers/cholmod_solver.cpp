@@ -35,9 +35,7 @@ namespace {
 using Cholmod = CholmodSolver::State;
 Cholmod* self(SUNLinearSolver s) { return static_cast<Cholmod*>(s->content); }
 
-SUNLinearSolver_Type type(SUNLinearSolver) { return SUNLINEARSOLVER_DIRECT; }
 SUNLinearSolver_ID id(SUNLinearSolver) { return SUNLINEARSOLVER_CUSTOM; }
-int initialize(SUNLinearSolver) { return SUNLS_SUCCESS; }
 
 int setup(SUNLinearSolver s, SUNMatrix a) {
   Cholmod& c = *self(s);
@@ -111,27 +109,11 @@ int solve(SUNLinearSolver s, SUNMatrix, N_Vector x, N_Vector b, realtype) {
 
 sunindextype last_flag(SUNLinearSolver s) { return self(s)->last_flag; }
 
-int free_shell(SUNLinearSolver s) {
-  // The state belongs to CholmodSolver; only the shell is SUNDIALS'.
-  SUNLinSolFreeEmpty(s);
-  return SUNLS_SUCCESS;
-}
-
 }  // namespace
 
-CholmodSolver::CholmodSolver(SUNContext context) : state_(std::make_unique<State>()) {
-  shell_.reset(SUNLinSolNewEmpty(context));
-  if (!shell_) throw std::runtime_error("SUNLinSolNewEmpty failed");
-  SUNLinearSolver s = shell_.get();
-  s->content = state_.get();
-  s->ops->gettype = type;
-  s->ops->getid = id;
-  s->ops->initialize = initialize;
-  s->ops->setup = setup;
-  s->ops->solve = solve;
-  s->ops->lastflag = last_flag;
-  s->ops->free = free_shell;
-}
+CholmodSolver::CholmodSolver(SUNContext context)
+    : state_(std::make_unique<State>()),
+      shell_(make_direct_solver_shell(context, state_.get(), id, setup, solve, last_flag)) {}
 
 CholmodSolver::~CholmodSolver() = default;
 

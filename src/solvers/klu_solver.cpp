@@ -88,10 +88,7 @@ namespace {
 using Klu = KluSolver::State;
 Klu* self(SUNLinearSolver s) { return static_cast<Klu*>(s->content); }
 
-SUNLinearSolver_Type type(SUNLinearSolver) { return SUNLINEARSOLVER_DIRECT; }
 SUNLinearSolver_ID id(SUNLinearSolver) { return SUNLINEARSOLVER_KLU; }
-// KINSOL calls this at every KINSol call; the analysis and the reference pivots stay.
-int initialize(SUNLinearSolver) { return SUNLS_SUCCESS; }
 
 int setup(SUNLinearSolver s, SUNMatrix a) {
   Klu& k = *self(s);
@@ -125,27 +122,11 @@ int solve(SUNLinearSolver s, SUNMatrix, N_Vector x, N_Vector b, realtype) {
 
 sunindextype last_flag(SUNLinearSolver s) { return self(s)->last_flag; }
 
-int free_shell(SUNLinearSolver s) {
-  // The state belongs to KluSolver; only the shell is SUNDIALS'.
-  SUNLinSolFreeEmpty(s);
-  return SUNLS_SUCCESS;
-}
-
 }  // namespace
 
-KluSolver::KluSolver(SUNContext context) : state_(std::make_unique<State>()) {
-  shell_.reset(SUNLinSolNewEmpty(context));
-  if (!shell_) throw std::runtime_error("SUNLinSolNewEmpty failed");
-  SUNLinearSolver s = shell_.get();
-  s->content = state_.get();
-  s->ops->gettype = type;
-  s->ops->getid = id;
-  s->ops->initialize = initialize;
-  s->ops->setup = setup;
-  s->ops->solve = solve;
-  s->ops->lastflag = last_flag;
-  s->ops->free = free_shell;
-}
+KluSolver::KluSolver(SUNContext context)
+    : state_(std::make_unique<State>()),
+      shell_(make_direct_solver_shell(context, state_.get(), id, setup, solve, last_flag)) {}
 
 KluSolver::~KluSolver() = default;
 

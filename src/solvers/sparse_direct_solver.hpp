@@ -30,4 +30,13 @@ public:
   virtual double condition_estimate() const = 0;
 };
 
+/// The SUNDIALS face of a direct solver of ours: a direct SUNLinearSolver whose `content` belongs
+/// to the C++ object (freeing the shell frees only the shell) and whose `initialize`, which KINSOL
+/// calls at every KINSol call, keeps what the solver has analysed.
+sundials::LinearSolver make_direct_solver_shell(SUNContext context, void* content,
+                                                SUNLinearSolver_ID (*id)(SUNLinearSolver),
+                                                int (*setup)(SUNLinearSolver, SUNMatrix),
+                                                int (*solve)(SUNLinearSolver, SUNMatrix, N_Vector, N_Vector, realtype),
+                                                sunindextype (*last_flag)(SUNLinearSolver));
+
 }  // namespace indentsim
