@@ -122,7 +122,9 @@ TEST(LinearSolvers, IdleOpenBlasWorkersStopAndTheBlasStillServesCholmod) {
   };
   const auto before = threads();
   EXPECT_TRUE(stop_idle_blas_workers());
-  if (std::thread::hardware_concurrency() > 1) EXPECT_LT(threads(), before);  // one worker per further core
+  if (std::thread::hardware_concurrency() > 1) {
+    EXPECT_LT(threads(), before);  // one worker per further core
+  }
   const auto cholmod = curve("elastic.toml", {"mesh.contact_nodes=6", "solver.linear=cholmod"});
   const auto klu = curve("elastic.toml", {"mesh.contact_nodes=6", "solver.linear=klu"});
   ASSERT_EQ(cholmod.size(), klu.size());

@@ -151,7 +151,6 @@ public:
 
   long total_factorizations() const;
   long total_symbolic_analyses() const;
-  long total_linear_iterations() const;
 
 private:
   struct Impl;

@@ -91,49 +91,56 @@ StrainDisplacement axisymmetric_q1(const Rectangle& rect, double xi, double eta)
 }
 }  // namespace
 
+namespace {
+using DilatationRow = Eigen::Matrix<double, 1, 8>;
+
+/// Q1's B at the four Gauss points of the ring element.
+std::array<StrainDisplacement, 4> axisymmetric_q1_at_gauss_points(const Rectangle& rect) {
+  const auto& points = gauss_points_2x2();
+  std::array<StrainDisplacement, 4> b;
+  for (std::size_t g = 0; g < points.size(); ++g) b[g] = axisymmetric_q1(rect, points[g].xi, points[g].eta);
+  return b;
+}
+
+// Mean dilatation (Hughes 1980; Hughes, The Finite Element Method, §4.4): the dilatation
+// eps11 + eps22 + eps33 at a point is replaced by its mean over the element's volume (weights
+// 2 pi r dA, by the same 2x2 rule), a third of the shift on each normal strain.
+DilatationRow mean_dilatation(const Axisymmetric& kinematics, const Rectangle& rect,
+                              const std::array<StrainDisplacement, 4>& q1) {
+  DilatationRow mean = DilatationRow::Zero();
+  double volume = 0.0;
+  const auto& points = gauss_points_2x2();
+  for (std::size_t g = 0; g < points.size(); ++g) {
+    const double w = points[g].weight * kinematics.measure(rect, points[g].xi);
+    mean += w * (q1[g].row(0) + q1[g].row(1) + q1[g].row(3));
+    volume += w;
+  }
+  return mean / volume;
+}
+
+void shift_to_mean_dilatation(StrainDisplacement& b, const DilatationRow& mean) {
+  const DilatationRow shift = (mean - (b.row(0) + b.row(1) + b.row(3))) / 3.0;
+  b.row(0) += shift;
+  b.row(1) += shift;
+  b.row(3) += shift;
+}
+}  // namespace
+
 StrainDisplacement Axisymmetric::strain_displacement(const Rectangle& rect, double xi, double eta,
                                                      ElementKind kind) const {
   StrainDisplacement b = axisymmetric_q1(rect, xi, eta);
-  if (kind == ElementKind::bbar) {
-    // Mean dilatation (Hughes 1980; Hughes, The Finite Element Method, §4.4): the dilatation
-    // eps11 + eps22 + eps33 at the point is replaced by its mean over the element's volume
-    // (weights 2 pi r dA, by the same 2x2 rule), a third of the shift on each normal strain.
-    Eigen::Matrix<double, 1, 8> mean = Eigen::Matrix<double, 1, 8>::Zero();
-    double volume = 0.0;
-    for (const GaussPoint& p : gauss_points_2x2()) {
-      const StrainDisplacement bp = axisymmetric_q1(rect, p.xi, p.eta);
-      const double w = p.weight * measure(rect, p.xi);
-      mean += w * (bp.row(0) + bp.row(1) + bp.row(3));
-      volume += w;
-    }
-    const Eigen::Matrix<double, 1, 8> shift = (mean / volume - (b.row(0) + b.row(1) + b.row(3))) / 3.0;
-    b.row(0) += shift;
-    b.row(1) += shift;
-    b.row(3) += shift;
-  }
+  if (kind == ElementKind::bbar)
+    shift_to_mean_dilatation(b, mean_dilatation(*this, rect, axisymmetric_q1_at_gauss_points(rect)));
   return b;
 }
 
 std::array<StrainDisplacement, 4> Axisymmetric::gauss_point_strain_displacements(const Rectangle& rect,
                                                                                  ElementKind kind) const {
   // As strain_displacement at each point, with the element's mean dilatation formed once.
-  const auto& points = gauss_points_2x2();
-  std::array<StrainDisplacement, 4> b;
-  for (std::size_t g = 0; g < points.size(); ++g) b[g] = axisymmetric_q1(rect, points[g].xi, points[g].eta);
+  std::array<StrainDisplacement, 4> b = axisymmetric_q1_at_gauss_points(rect);
   if (kind != ElementKind::bbar) return b;
-  Eigen::Matrix<double, 1, 8> mean = Eigen::Matrix<double, 1, 8>::Zero();
-  double volume = 0.0;
-  for (std::size_t g = 0; g < points.size(); ++g) {
-    const double w = points[g].weight * measure(rect, points[g].xi);
-    mean += w * (b[g].row(0) + b[g].row(1) + b[g].row(3));
-    volume += w;
-  }
-  for (StrainDisplacement& bg : b) {
-    const Eigen::Matrix<double, 1, 8> shift = (mean / volume - (bg.row(0) + bg.row(1) + bg.row(3))) / 3.0;
-    bg.row(0) += shift;
-    bg.row(1) += shift;
-    bg.row(3) += shift;
-  }
+  const DilatationRow mean = mean_dilatation(*this, rect, b);
+  for (StrainDisplacement& bg : b) shift_to_mean_dilatation(bg, mean);
   return b;
 }
 

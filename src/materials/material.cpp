@@ -138,8 +138,8 @@ J2Response J2Law::respond(const VoigtVector& strain, const J2State& old) const {
   // eps_p(e_u) = e_u omega(e_u) (the total intensity less the elastic part sigma_u / 3 mu), so with
   // e_u the intensity at the end of the step, sigma_y = 3 mu (e_u - eps_p_old - dgamma) and the
   // return equation becomes linear in e_u: e_u = sigma_eq_trial / (3 mu) + eps_p_old.  (Iterating
-  // on dgamma instead needs eps_p -> e_u inverted at every iterate: a nested Newton, and most of
-  // a J2 run's time under a power law's pow().)  The point yields when that e_u carries more
+  // on dgamma instead needs eps_p -> e_u inverted at every iterate: a nested Newton, whose pow()
+  // calls under a power law were a fifth of a J2 cone run.)  The point yields when that e_u carries more
   // plastic strain than the history: e_u omega(e_u) > eps_p_old.
   const double e_u = trial_equivalent / (3.0 * mu_) + old.equivalent_plastic_strain;
   const double omega = e_u > curve_.elastic_limit() ? curve_.omega(e_u) : 0.0;

@@ -1,7 +1,6 @@
 #include "klu_solver.hpp"
 
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <stdexcept>
 
@@ -27,7 +26,7 @@ struct KluSolver::State {
   klu_l_numeric* current = nullptr;    // the factor the last setup left (reference or fresh)
   // The pattern, copied once: KLU's interface takes non-const pointers.
   std::vector<SuiteSparse_long> column_start, row_index;
-  long numeric_factorizations = 0, symbolic_analyses = 0, fresh_pivot_factorizations = 0;
+  long numeric_factorizations = 0, symbolic_analyses = 0;
   bool keep_factor = false, estimate_condition = false;
   double condition_estimate = 0.0;
   int last_flag = SUNLS_SUCCESS;
@@ -74,7 +73,6 @@ struct KluSolver::State {
       // The reference's pivots do not suit this matrix: its own, in the second factor.
       if (fresh) klu_l_free_numeric(&fresh, &common);
       fresh = klu_l_factor(column_start.data(), row_index.data(), values, symbolic, &common);
-      ++fresh_pivot_factorizations;
       current = fresh;
       if (!fresh) return SUNLS_PACKAGE_FAIL_REC;  // singular: Newton cuts the increment back
     }
@@ -139,7 +137,6 @@ void KluSolver::analyse(const std::vector<std::int64_t>& column_start, const std
 }
 long KluSolver::numeric_factorizations() const { return state_->numeric_factorizations; }
 long KluSolver::symbolic_analyses() const { return state_->symbolic_analyses; }
-long KluSolver::fresh_pivot_factorizations() const { return state_->fresh_pivot_factorizations; }
 void KluSolver::keep_factor_once() { state_->keep_factor = true; }
 void KluSolver::clear_keep_factor() { state_->keep_factor = false; }
 void KluSolver::estimate_condition_at_next_setup() { state_->estimate_condition = true; }

@@ -48,8 +48,6 @@ public:
   void clear_keep_factor() override;
   void estimate_condition_at_next_setup() override;
   double condition_estimate() const override;
-  /// Factorizations with pivots of their own, because a refactorization lost accuracy.
-  long fresh_pivot_factorizations() const;
 
   struct State;  // KLU's common block, symbolic analysis and factors
 

@@ -119,7 +119,6 @@ struct NewtonSolver::Impl {
   // Krylov solves: the Jacobian at the current iterate (for J v), and the preconditioner's age.
   std::vector<double> jacobian_values, jacobian_point;
   int preconditioner_setups = 0;  // calls of psetup in this solve
-  long linear_iterations = 0;     // GMRES iterations over all solves
 
   Impl(IncrementEquations& eq, const NewtonSettings& s)
       : equations(eq),
@@ -325,7 +324,6 @@ NewtonReport NewtonSolver::solve(double alpha, std::vector<double>& u, Globaliza
     long linear = 0;
     KINGetNumLinIters(m.kinsol, &linear);
     report.linear_iterations = linear;
-    m.linear_iterations += linear;
   }
   report.factorizations = total_factorizations() - factorizations_before;
   report.symbolic_analyses = total_symbolic_analyses() - analyses_before;
@@ -371,6 +369,5 @@ void NewtonSolver::solve_linearized(const std::vector<double>& u, double alpha,
 
 long NewtonSolver::total_factorizations() const { return impl_->direct->numeric_factorizations(); }
 long NewtonSolver::total_symbolic_analyses() const { return impl_->direct->symbolic_analyses(); }
-long NewtonSolver::total_linear_iterations() const { return impl_->linear_iterations; }
 
 }  // namespace indentsim
