@@ -5,7 +5,8 @@
 // Why not SUNLinSol_KLU as it is: KINSOL calls a linear solver's `initialize` at every KINSol call
 // (every increment), and SUNLinSol_KLU's forces a new symbolic analysis and a full factorization
 // there (../shared/STACK.md).  The pattern of a Newton system never changes, so this solver
-// analyses it once (AMD ordering: 2-3x less fill than KLU's default COLAMD on these matrices).
+// analyses it once, in CHOLMOD's nested-dissection order (less fill than AMD on a refined mesh;
+// AMD leaves 2-3x less than KLU's default COLAMD on these matrices).
 //
 // Pivots chosen once, on a matrix of the mesh alone.  KLU's factorization with partial pivoting
 // (klu_factor) chooses a pivot sequence; klu_refactor computes the factors of another matrix of the
