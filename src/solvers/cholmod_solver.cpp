@@ -60,7 +60,7 @@ int setup(SUNLinearSolver s, SUNMatrix a) {
     c.row_index.assign(rowind, rowind + nnz);
     c.pinned.assign(n, 0);
     c.original.assign(nnz, 0.0);
-    c.factor = cholmod_l_analyze(c.matrix, &c.common);
+    c.factor = analyze_serialized(c.matrix, &c.common);
     if (!c.factor) return c.last_flag = SUNLS_PACKAGE_FAIL_UNREC;
     ++c.symbolic_analyses;
   }

@@ -179,7 +179,7 @@ FarFieldCondensation::FarFieldCondensation(const ElasticStiffness& stiffness, co
         }
     }
     fp[far_count] = static_cast<SuiteSparse_long>(k);
-    far_->factor = cholmod_l_analyze(far_->matrix, cm);
+    far_->factor = analyze_serialized(far_->matrix, cm);
     if (!far_->factor || !cholmod_l_factorize(far_->matrix, far_->factor, cm) || cm->status != CHOLMOD_OK)
       throw std::runtime_error(fmt::format("the far-field stiffness could not be factored (CHOLMOD status {}): "
                                            "is the far field held by the clamped base?",

@@ -47,7 +47,7 @@ std::vector<SuiteSparse_long> nested_dissection_order(std::vector<SuiteSparse_lo
   pattern.dtype = CHOLMOD_DOUBLE;
   pattern.sorted = 1;
   pattern.packed = 1;
-  cholmod_factor* symbolic = cholmod_l_analyze(&pattern, cm);
+  cholmod_factor* symbolic = analyze_serialized(&pattern, cm);
   if (!symbolic) return {};
   const auto* perm = static_cast<const SuiteSparse_long*>(symbolic->Perm);
   std::vector<SuiteSparse_long> order(perm, perm + n);
