@@ -22,10 +22,9 @@
 
 #include "indentsim/load_case.hpp"
 #include "indentsim/load_stepping.hpp"
+#include "indentsim/simulation.hpp"
 
 namespace indentsim {
-
-class Simulation;
 
 /// Richardson's extrapolation of a value computed on a fine mesh and on one coarser by `ratio`
 /// (of the spacings, > 1), for an error of order `order`.
@@ -70,6 +69,9 @@ public:
   /// companion that does not converge is kept up to where it stopped (rows beyond have no
   /// estimate) and said in warnings().
   explicit DiscretizationErrorEstimate(const Simulation& main);
+  /// The same from the main run's load case and plan alone, before its model is built: a new run
+  /// starts its companions on a second thread while it builds its own (run_driver.cpp).
+  DiscretizationErrorEstimate(const LoadCase& main_case, const RunPlan& main_plan);
 
   struct AtIncrement {
     double force_error = 0.0;         ///< estimated |P - P_exact| [N/m or N]

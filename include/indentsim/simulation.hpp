@@ -65,8 +65,10 @@ public:
   explicit Simulation(LoadCase load_case, std::optional<double> planned_contact_half_width = std::nullopt,
                       std::optional<NearField> near_field = std::nullopt);
   /// A run on a given plan, no pilot: the error estimate's companion runs (error_estimate.hpp)
-  /// use the main run's planned contact width with fewer contact nodes.
-  Simulation(LoadCase load_case, const RunPlan& plan);
+  /// use the main run's planned contact width with fewer contact nodes, and a new run whose plan
+  /// was made first (its companions start from the plan) continues from it.  `times` holds the
+  /// phases timed before (planning).
+  Simulation(LoadCase load_case, const RunPlan& plan, PhaseTimes times = {});
   ~Simulation();
 
   const LoadCase& load_case() const { return load_case_; }

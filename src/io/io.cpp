@@ -299,17 +299,21 @@ std::string RunOutput::error_fields(const PhaseTimes& times) const {
     for (const IncrementRecord& r : records_)
       if (std::abs(r.force) > std::abs(peak->force)) peak = &r;
     final_estimate = e.at(records_.back());
-    // The companions' cost against the rest of the run (planning, model, stepping, output).
-    double estimate_seconds = 0.0, run_seconds = 0.0;
-    for (const auto& [phase, seconds] : times.phases()) (phase == "error estimate" ? estimate_seconds : run_seconds) += seconds;
+    // The companions' work against the rest of the run (planning, model, stepping, output), and
+    // the wall time they added: the run's wait for them ("error estimate" phase), less than their
+    // work where they ran on a second core beside the model's build (run_driver.cpp).
+    double wait_seconds = 0.0, run_seconds = 0.0;
+    for (const auto& [phase, seconds] : times.phases()) (phase == "error estimate" ? wait_seconds : run_seconds) += seconds;
+    const double estimate_seconds = e.wall_seconds();
     out += fmt::format("  \"error_estimate\": {{\"method\": \"{}\", \"contact_nodes\": {}, "
                        "\"companion_contact_nodes\": [{}], \"P_nominal_order\": {}, \"a_order\": {},\n"
                        "    \"final\": {},\n    \"peak\": {},\n"
-                       "    \"time_s\": {:.6f}, \"cost_fraction\": {}}},\n",
+                       "    \"time_s\": {:.6f}, \"cost_fraction\": {}, \"wall_added_s\": {:.6f}, \"wall_fraction\": {}}},\n",
                        e.method() == ErrorEstimateChoice::observed ? "observed" : "richardson", e.contact_nodes(),
                        companions, e.force_order(),
                        DiscretizationErrorEstimate::nominal_width_order, at_row(records_.back()), at_row(*peak),
-                       estimate_seconds, run_seconds > 0.0 ? fmt::format("{:.4f}", estimate_seconds / run_seconds) : "null");
+                       estimate_seconds, run_seconds > 0.0 ? fmt::format("{:.4f}", estimate_seconds / run_seconds) : "null",
+                       wait_seconds, run_seconds > 0.0 ? fmt::format("{:.4f}", wait_seconds / run_seconds) : "null");
   }
   if (target_choice_) {
     std::string attempts;

@@ -44,16 +44,16 @@ std::optional<double> observed_order(double f1, double f2, double f3, double h1,
 namespace {
 
 /// The main run's case on its own plan but `contact_nodes` across the planned contact width.
-CompanionRun run_companion(const Simulation& main, int contact_nodes) {
+CompanionRun run_companion(const LoadCase& main_case, const RunPlan& main_plan, int contact_nodes) {
   const auto start = std::chrono::steady_clock::now();
   CompanionRun companion;
   companion.contact_nodes = contact_nodes;
-  LoadCase lc = main.load_case();
+  LoadCase lc = main_case;
   lc.mesh.contact_nodes = contact_nodes;
   // The main run's planned contact width and its pilot's plastic zone (a resumed run has it from
   // its checkpoint, so its estimate is the original's bit for bit): the companion's near field
   // grows with the zone as the main run's does.
-  const RunPlan plan{plan_mesh(lc, main.plan().contact_half_width_estimate), main.plastic_zone_growth()};
+  const RunPlan plan{plan_mesh(lc, main_plan.mesh.contact_half_width_estimate), main_plan.plastic_zone};
   try {
     Simulation sim(lc, plan);
     sim.run([&](const IncrementRecord& r) { companion.curve.push_back(r); });
@@ -76,15 +76,18 @@ std::optional<std::string> error_estimate_unavailable(const LoadCase& load_case)
 }
 
 DiscretizationErrorEstimate::DiscretizationErrorEstimate(const Simulation& main)
-    : method_(main.load_case().mesh.error_estimate),
-      force_order_(force_order_assumed(main.load_case())),
-      contact_nodes_(main.load_case().mesh.contact_nodes) {
+    : DiscretizationErrorEstimate(main.load_case(), RunPlan{main.plan(), main.plastic_zone_growth()}) {}
+
+DiscretizationErrorEstimate::DiscretizationErrorEstimate(const LoadCase& main_case, const RunPlan& main_plan)
+    : method_(main_case.mesh.error_estimate),
+      force_order_(force_order_assumed(main_case)),
+      contact_nodes_(main_case.mesh.contact_nodes) {
   if (method_ == ErrorEstimateChoice::off) throw std::invalid_argument("error estimate: mesh.error_estimate is off");
-  if (const auto why = error_estimate_unavailable(main.load_case())) throw std::invalid_argument(*why);
+  if (const auto why = error_estimate_unavailable(main_case)) throw std::invalid_argument(*why);
   std::vector<int> levels{contact_nodes_ / 2};
   if (method_ == ErrorEstimateChoice::observed) levels.push_back(contact_nodes_ / 4);
   for (int nodes : levels) {
-    companions_.push_back(run_companion(main, nodes));
+    companions_.push_back(run_companion(main_case, main_plan, nodes));
     const CompanionRun& c = companions_.back();
     if (!c.failure.empty())
       warnings_.push_back(fmt::format("the error estimate's companion run (contact_nodes = {}) stopped after "

@@ -2,8 +2,10 @@
 #include "indentsim/run_driver.hpp"
 
 #include <chrono>
+#include <future>
 #include <memory>
 #include <optional>
+#include <thread>
 
 #include <fmt/format.h>
 
@@ -51,6 +53,13 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+std::string companions_note(const LoadCase& lc) {
+  const bool observed = lc.mesh.error_estimate == ErrorEstimateChoice::observed;
+  return fmt::format("error estimate: companion run{} at contact_nodes = {}", observed ? "s" : "",
+                     observed ? fmt::format("{} and {}", lc.mesh.contact_nodes / 2, lc.mesh.contact_nodes / 4)
+                              : std::to_string(lc.mesh.contact_nodes / 2));
+}
+
 /// mesh.error_estimate: the companion runs of `sim` (before anything is written), timed as the
 /// run's "error estimate" phase; null when it is off or unavailable.
 std::unique_ptr<DiscretizationErrorEstimate> estimate_error(Simulation& sim, RunObserver& observer) {
@@ -60,14 +69,54 @@ std::unique_ptr<DiscretizationErrorEstimate> estimate_error(Simulation& sim, Run
     observer.warning(*why);
     return nullptr;
   }
-  const bool observed = lc.mesh.error_estimate == ErrorEstimateChoice::observed;
-  observer.note(fmt::format("error estimate: companion run{} at contact_nodes = {}", observed ? "s" : "",
-                            observed ? fmt::format("{} and {}", lc.mesh.contact_nodes / 2, lc.mesh.contact_nodes / 4)
-                                     : std::to_string(lc.mesh.contact_nodes / 2)));
+  observer.note(companions_note(lc));
   const PhaseTimes::Scope timing = sim.times().measure("error estimate");
   auto estimate = std::make_unique<DiscretizationErrorEstimate>(sim);
   for (const auto& warning : estimate->warnings()) observer.warning(warning);
   return estimate;
+}
+
+/// A new run's simulation and its error estimate (null when off or unavailable).
+struct NewRun {
+  std::unique_ptr<Simulation> simulation;
+  std::unique_ptr<DiscretizationErrorEstimate> estimate;
+};
+
+/// Plans a new run, builds its model and runs its companions.  The companions need only the load
+/// case and the plan, so where a second core is there they run on it while this thread builds the
+/// main run's model -- the condensation of the far field and the factorizations' analysis, 40% of
+/// an elastic run's time and longer than its companion's whole run -- and the run waits for what
+/// is left of them before anything is written: the "error estimate" phase is that wait.  Each run
+/// is single-threaded and deterministic (worker_threads.hpp), so the estimate is the same either
+/// way.  On one core the companions run after the model, as on a resume.
+NewRun start_run(const LoadCase& lc, RunObserver& observer) {
+  PhaseTimes times;
+  RunPlan plan;
+  {
+    const PhaseTimes::Scope timing = times.measure("planning");
+    plan = plan_run(lc);
+  }
+  // Declared after the plan and the case it reads: leaving this scope (the model failing to
+  // build) waits for the companions before either goes.
+  std::future<std::unique_ptr<DiscretizationErrorEstimate>> companions;
+  const bool estimate = lc.mesh.error_estimate != ErrorEstimateChoice::off && !error_estimate_unavailable(lc);
+  if (estimate && std::thread::hardware_concurrency() >= 2)
+    companions = std::async(std::launch::async,
+                            [&lc, &plan] { return std::make_unique<DiscretizationErrorEstimate>(lc, plan); });
+  NewRun run;
+  run.simulation = std::make_unique<Simulation>(lc, plan, std::move(times));  // validates the mesh size
+  Simulation& sim = *run.simulation;
+  observer.note(describe_mesh(sim));
+  observer.note(describe_near_field(sim));
+  if (!companions.valid()) {
+    run.estimate = estimate_error(sim, observer);
+    return run;
+  }
+  observer.note(companions_note(lc));
+  const PhaseTimes::Scope timing = sim.times().measure("error estimate");
+  run.estimate = companions.get();  // rethrows a companion's Interrupted: nothing is written yet
+  for (const auto& warning : run.estimate->warnings()) observer.warning(warning);
+  return run;
 }
 
 /// Steps the simulation to the end of its load path, writing outputs and checkpoints; on
@@ -169,10 +218,9 @@ RunReport run_load_case(LoadCase lc, RunObserver& observer) {
                               target->attempts.back().relative_error, lc.mesh.contact_nodes));
   }
   for (;;) {
-    Simulation sim(lc);  // validates the mesh size before anything is written
-    observer.note(describe_mesh(sim));
-    observer.note(describe_near_field(sim));
-    const auto estimate = estimate_error(sim, observer);
+    const NewRun run = start_run(lc, observer);  // before anything is written
+    Simulation& sim = *run.simulation;
+    const auto& estimate = run.estimate;
     folder.clear_earlier_run();
     RunOutput output(folder.dir(), lc, estimate.get());
     if (target) output.set_target_choice(*target);

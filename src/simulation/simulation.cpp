@@ -190,7 +190,8 @@ Simulation::Simulation(LoadCase load_case, std::optional<double> planned_contact
   build(run_plan, near_field);
 }
 
-Simulation::Simulation(LoadCase load_case, const RunPlan& plan) : load_case_(std::move(load_case)) {
+Simulation::Simulation(LoadCase load_case, const RunPlan& plan, PhaseTimes times)
+    : load_case_(std::move(load_case)), times_(std::move(times)) {
   build(plan, std::nullopt);
 }
 
