@@ -98,6 +98,27 @@ TEST(LinearSolvers, OneBlasThreadPerRunUnlessTheEnvironmentAsks) {
   else EXPECT_EQ(get(), 1);
 }
 
+// worker_threads.hpp: OpenMP's settings are each thread's own, and CHOLMOD's regions ask for four
+// threads explicitly: every thread that runs a simulation (here a second one, after the first
+// thread's run) gets one OpenMP thread and dynamic adjustment, which bounds those regions.
+TEST(LinearSolvers, EveryThreadThatRunsGetsOneOpenMpThread) {
+  using Getter = int (*)();
+  const auto max_threads = reinterpret_cast<Getter>(dlsym(RTLD_DEFAULT, "omp_get_max_threads"));
+  const auto dynamic = reinterpret_cast<Getter>(dlsym(RTLD_DEFAULT, "omp_get_dynamic"));
+  if (!max_threads || !dynamic) GTEST_SKIP() << "no OpenMP runtime in this process";
+  if (std::getenv("OMP_NUM_THREADS") || std::getenv("OMP_DYNAMIC")) GTEST_SKIP() << "the environment sets OpenMP";
+  curve("elastic.toml", {"mesh.contact_nodes=6", "solver.linear=cholmod"});
+  int threads = 0, adjusted = 0;
+  std::thread other([&] {
+    curve("elastic.toml", {"mesh.contact_nodes=6", "solver.linear=cholmod"});
+    threads = max_threads();
+    adjusted = dynamic();
+  });
+  other.join();
+  EXPECT_EQ(threads, 1);
+  EXPECT_EQ(adjusted, 1);
+}
+
 // CMakeLists.txt links OpenBLAS ahead of Ceres' ATLAS: the BLAS routines CHOLMOD calls by name
 // (its supernodal kernels: dgemm, dsyrk, dtrsm, dpotrf) are OpenBLAS's, not ATLAS's generic ones.
 TEST(LinearSolvers, CholmodCallsOpenBlas) {

@@ -11,7 +11,9 @@
 // nothing to set.
 namespace indentsim {
 
-/// Applies the policy above (once per process; later calls do nothing).  Returns the BLAS
+/// Applies the policy above: OpenBLAS's once per process, OpenMP's once per calling thread (its
+/// settings are the thread's own; with one thread asked for, dynamic adjustment is switched on so
+/// that CHOLMOD's regions with an explicit num_threads(4) get one thread too).  Returns the BLAS
 /// threads the policy left in place (1, or what the environment asked for; 0 when unknown).
 int limit_library_threads();
 
