@@ -1,7 +1,9 @@
 // The error estimate a run gives of itself (mesh.error_estimate, mesh.target_error): Richardson's
 // formula and the observed order on exact power laws, then the estimate of real runs against
 // their true discretization error, measured from a mesh sequence three times finer.
+#include <algorithm>
 #include <cmath>
+#include <sstream>
 #include <optional>
 #include <string>
 #include <vector>
@@ -10,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "indentsim/error_estimate.hpp"
+#include "indentsim/io.hpp"
 #include "indentsim/simulation.hpp"
 #include "test_support.hpp"
 
@@ -168,6 +171,48 @@ TEST(ErrorEstimate, RowsBeyondAStoppedCompanionHaveNone) {
   IncrementRecord elsewhere = estimate.companions()[0].curve.back();
   elsewhere.alpha *= 0.5;  // same step, another depth: not the same increment
   EXPECT_FALSE(estimate.at(elsewhere));
+}
+
+// A run's companions may still be running when its first increments are done (run_driver.cpp):
+// curve.csv then holds the rows back, with the estimate's columns in its header, and writes them
+// with their estimate when it comes -- the same file as when it was there from the start.
+class HeldRows : public indentsim::testing::TempDirTest {};
+
+TEST_F(HeldRows, CurveRowsWaitForTheEstimateAndMatchTheOnesWrittenWithIt) {
+  LoadCase lc = shipped_case("paper.toml", {"load.increments=4", "mesh.contact_nodes=10"});
+  Simulation sim(lc);
+  const DiscretizationErrorEstimate estimate(sim);
+  std::vector<IncrementRecord> rows;
+  sim.run([&](const IncrementRecord& r) { rows.push_back(r); });
+  {
+    CurveWriter at_once(dir_ / "at_once.csv", &estimate);
+    for (const auto& r : rows) at_once.write(r);
+  }
+  const auto lines = [](const std::filesystem::path& file) {
+    std::vector<std::string> out;
+    std::istringstream in(indentsim::testing::slurp(file));
+    for (std::string line; std::getline(in, line);) out.push_back(line);
+    return out;
+  };
+  CurveWriter held(dir_ / "held.csv", nullptr, true);
+  for (const auto& r : rows) held.write(r);
+  EXPECT_EQ(lines(dir_ / "held.csv"), std::vector<std::string>{CurveWriter::header(true)});  // rows held back
+  held.set_error_estimate(&estimate);
+  held.write(rows.back());  // a later row goes straight to the file
+  std::vector<std::string> expected = lines(dir_ / "at_once.csv");
+  expected.push_back(expected.back());
+  EXPECT_EQ(lines(dir_ / "held.csv"), expected);
+  ASSERT_GT(expected.size(), 2u);
+  EXPECT_EQ(std::count(expected[2].begin(), expected[2].end(), ','), 13);
+
+  // No estimate after all (its companions stopped by a signal): the same columns, left empty.
+  CurveWriter none(dir_ / "none.csv", nullptr, true);
+  none.write(rows[1]);
+  none.set_error_estimate(nullptr);
+  const auto written = lines(dir_ / "none.csv");
+  ASSERT_EQ(written.size(), 2u);
+  EXPECT_NE(written[1].find(",,,"), std::string::npos) << written[1];
+  EXPECT_EQ(std::count(written[1].begin(), written[1].end(), ','), 13);
 }
 
 TEST(ErrorEstimate, TargetErrorIsMetAndTrue) {

@@ -20,18 +20,27 @@ namespace indentsim {
 /// the run goes so that a stopped run keeps every converged increment.
 /// With an error estimate (mesh.error_estimate, error_estimate.hpp) three more columns before
 /// wall_s: P_error_estimate, a_error_estimate and P_extrapolated (empty where a companion run
-/// has no such increment).
+/// has no such increment).  An estimate still being computed (`estimate_pending`: the companions
+/// run beside the first increments) holds the rows back in memory until set_error_estimate.
 class CurveWriter {
 public:
-  CurveWriter(const std::filesystem::path& file, const DiscretizationErrorEstimate* error_estimate = nullptr);
+  CurveWriter(const std::filesystem::path& file, const DiscretizationErrorEstimate* error_estimate = nullptr,
+              bool estimate_pending = false);
 
   void write(const IncrementRecord& record);
+  /// The estimate has come (null: it will not, its cells stay empty): writes the rows held back.
+  void set_error_estimate(const DiscretizationErrorEstimate* error_estimate);
   static std::string header(bool with_error_estimate = false);
-  static std::string format(const IncrementRecord& record, const DiscretizationErrorEstimate* error_estimate = nullptr);
+  /// A row; `with_estimate_columns` (default: when there is an estimate) writes the estimate's
+  /// cells, empty where it has nothing for the row.
+  static std::string format(const IncrementRecord& record, const DiscretizationErrorEstimate* error_estimate = nullptr,
+                            bool with_estimate_columns = false);
 
 private:
   AppendedFile file_;
   const DiscretizationErrorEstimate* error_estimate_;
+  bool estimate_columns_ = false, pending_ = false;
+  std::vector<IncrementRecord> held_;
 };
 
 /// How a run ended, as summary.json says in "status": "running" from its first write until it
@@ -104,6 +113,13 @@ public:
   RunOutput(const std::filesystem::path& dir, const LoadCase& load_case,
             const DiscretizationErrorEstimate* error_estimate = nullptr,
             const std::vector<IncrementRecord>& replay_curve = {}, const std::vector<double>& replay_depths = {});
+  /// A new run whose estimate is still being computed: curve.csv has its columns and holds its
+  /// rows back until set_error_estimate, which must come before a checkpoint (the rows up to a
+  /// checkpoint are on disk) and before finish().
+  RunOutput(const std::filesystem::path& dir, const LoadCase& load_case, bool error_estimate_pending);
+  /// The estimate of a run built with error_estimate_pending (null: none after all, e.g. its
+  /// companions were stopped by a signal).  Must outlive this object.
+  void set_error_estimate(const DiscretizationErrorEstimate* error_estimate);
   /// How mesh.target_error chose this run's mesh (summary.json "target_error").
   void set_target_choice(const TargetErrorChoice& choice) { target_choice_ = choice; }
   void increment(const Simulation& sim, const IncrementRecord& record);
@@ -124,6 +140,9 @@ public:
   const std::vector<double>& free_surface_depths() const { return depths_; }
 
 private:
+  RunOutput(const std::filesystem::path& dir, const LoadCase& load_case,
+            const DiscretizationErrorEstimate* error_estimate, const std::vector<IncrementRecord>& replay_curve,
+            const std::vector<double>& replay_depths, bool error_estimate_pending);
   void write_fields(const Simulation& sim, int step);
   /// At a peak of the load path: the exact unloading stiffness and the true contact radius.
   void record_true_contact(const Simulation& sim, int step);

@@ -60,9 +60,22 @@ std::string to_string(RunStatus status) {
   return "?";
 }
 
-CurveWriter::CurveWriter(const std::filesystem::path& file, const DiscretizationErrorEstimate* error_estimate)
-    : file_(file), error_estimate_(error_estimate) {
-  file_.append(header(error_estimate != nullptr) + "\n");
+CurveWriter::CurveWriter(const std::filesystem::path& file, const DiscretizationErrorEstimate* error_estimate,
+                         bool estimate_pending)
+    : file_(file),
+      error_estimate_(error_estimate),
+      estimate_columns_(error_estimate != nullptr || estimate_pending),
+      pending_(estimate_pending && error_estimate == nullptr) {
+  file_.append(header(estimate_columns_) + "\n");
+}
+
+void CurveWriter::set_error_estimate(const DiscretizationErrorEstimate* error_estimate) {
+  error_estimate_ = error_estimate;
+  pending_ = false;
+  std::string rows;
+  for (const IncrementRecord& r : held_) rows += format(r, error_estimate_, estimate_columns_) + "\n";
+  held_.clear();
+  if (!rows.empty()) file_.append(rows);
 }
 
 std::string CurveWriter::header(bool with_error_estimate) {
@@ -72,21 +85,28 @@ std::string CurveWriter::header(bool with_error_estimate) {
          (with_error_estimate ? ",P_error_estimate,a_error_estimate,P_extrapolated" : "") + ",wall_s";
 }
 
-std::string CurveWriter::format(const IncrementRecord& r, const DiscretizationErrorEstimate* error_estimate) {
+std::string CurveWriter::format(const IncrementRecord& r, const DiscretizationErrorEstimate* error_estimate,
+                                bool with_estimate_columns) {
   // Full round-trip precision: the curve is data, not a report.
   std::string line = fmt::format("{},{:.17g},{:.17g},{:.17g},{},{},{},{},{},{:.17g}", r.step, r.alpha, r.force,
                                  r.half_width, r.contact_nodes, r.newton_iterations, r.factorizations, r.cutbacks,
                                  r.plastic_points, r.max_strain_intensity);
-  if (error_estimate) {
-    if (const auto e = error_estimate->at(r))
+  if (error_estimate || with_estimate_columns) {
+    if (const auto e = error_estimate ? error_estimate->at(r) : std::nullopt)
       line += fmt::format(",{:.6e},{:.6e},{:.17g}", e->force_error, e->width_error, e->force_extrapolated);
     else
-      line += ",,,";  // the companion stopped before this increment
+      line += ",,,";  // the companion stopped before this increment (or never ran)
   }
   return line + fmt::format(",{:.6f}", r.wall_seconds);
 }
 
-void CurveWriter::write(const IncrementRecord& record) { file_.append(format(record, error_estimate_) + "\n"); }
+void CurveWriter::write(const IncrementRecord& record) {
+  if (pending_) {
+    held_.push_back(record);
+    return;
+  }
+  file_.append(format(record, error_estimate_, estimate_columns_) + "\n");
+}
 
 LoadHistorySummary::LoadHistorySummary(const LoadCase* load_case) {
   if (!load_case) return;
@@ -191,13 +211,27 @@ std::string LoadHistorySummary::json(const std::string& run_fields, RunStatus st
 RunOutput::RunOutput(const std::filesystem::path& dir, const LoadCase& load_case,
                      const DiscretizationErrorEstimate* error_estimate,
                      const std::vector<IncrementRecord>& replay_curve, const std::vector<double>& replay_depths)
+    : RunOutput(dir, load_case, error_estimate, replay_curve, replay_depths, false) {}
+
+RunOutput::RunOutput(const std::filesystem::path& dir, const LoadCase& load_case, bool error_estimate_pending)
+    : RunOutput(dir, load_case, nullptr, {}, {}, error_estimate_pending) {}
+
+void RunOutput::set_error_estimate(const DiscretizationErrorEstimate* error_estimate) {
+  error_estimate_ = error_estimate;
+  curve_.set_error_estimate(error_estimate);
+}
+
+RunOutput::RunOutput(const std::filesystem::path& dir, const LoadCase& load_case,
+                     const DiscretizationErrorEstimate* error_estimate,
+                     const std::vector<IncrementRecord>& replay_curve, const std::vector<double>& replay_depths,
+                     bool error_estimate_pending)
     : dir_(dir),
       run_fields_(run_fields(load_case)),
       error_estimate_(error_estimate),
       summary_(&load_case),
       fields_every_(load_case.output.fields_every),
       profile_depths_(load_case.output.profile_depths),
-      curve_(dir / "curve.csv", error_estimate),
+      curve_(dir / "curve.csv", error_estimate, error_estimate_pending),
       fields_(dir),
       deepest_depth_(load_case.max_depth()) {
   const std::vector<double> targets = plan_increments(load_case.load);

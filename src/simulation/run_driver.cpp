@@ -76,19 +76,20 @@ std::unique_ptr<DiscretizationErrorEstimate> estimate_error(Simulation& sim, Run
   return estimate;
 }
 
-/// A new run's simulation and its error estimate (null when off or unavailable).
+/// A new run's simulation and its error estimate: there (null when off or unavailable), or still
+/// being computed by its companions on a second thread (`companions` valid).
 struct NewRun {
   std::unique_ptr<Simulation> simulation;
   std::unique_ptr<DiscretizationErrorEstimate> estimate;
+  std::future<std::unique_ptr<DiscretizationErrorEstimate>> companions;
 };
 
-/// Plans a new run, builds its model and runs its companions.  The companions need only the load
-/// case and the plan, so where a second core is there they run on it while this thread builds the
-/// main run's model -- the condensation of the far field and the factorizations' analysis, 40% of
-/// an elastic run's time and longer than its companion's whole run -- and the run waits for what
-/// is left of them before anything is written: the "error estimate" phase is that wait.  Each run
-/// is single-threaded and deterministic (worker_threads.hpp), so the estimate is the same either
-/// way.  On one core the companions run after the model, as on a resume.
+/// Plans a new run, builds its model and starts its companions.  The companions need only the
+/// load case and the plan, so where a second core is there they run on it while this thread
+/// builds the main run's model and steps its first increments (drive() takes their estimate as
+/// soon as it is there; curve.csv holds its rows back until then).  Each run is single-threaded
+/// and deterministic (worker_threads.hpp), so the estimate is the same either way.  On one core
+/// the companions run after the model, as on a resume.
 NewRun start_run(const LoadCase& lc, RunObserver& observer) {
   PhaseTimes times;
   RunPlan plan;
@@ -96,33 +97,24 @@ NewRun start_run(const LoadCase& lc, RunObserver& observer) {
     const PhaseTimes::Scope timing = times.measure("planning");
     plan = plan_run(lc);
   }
-  // Declared after the plan and the case it reads: leaving this scope (the model failing to
-  // build) waits for the companions before either goes.
-  std::future<std::unique_ptr<DiscretizationErrorEstimate>> companions;
+  NewRun run;
   const bool estimate = lc.mesh.error_estimate != ErrorEstimateChoice::off && !error_estimate_unavailable(lc);
   if (estimate && std::thread::hardware_concurrency() >= 2)
-    companions = std::async(std::launch::async,
-                            [&lc, &plan] { return std::make_unique<DiscretizationErrorEstimate>(lc, plan); });
-  NewRun run;
+    run.companions = std::async(std::launch::async,
+                                [lc, plan] { return std::make_unique<DiscretizationErrorEstimate>(lc, plan); });
   run.simulation = std::make_unique<Simulation>(lc, plan, std::move(times));  // validates the mesh size
   Simulation& sim = *run.simulation;
   observer.note(describe_mesh(sim));
   observer.note(describe_near_field(sim));
-  if (!companions.valid()) {
-    run.estimate = estimate_error(sim, observer);
-    return run;
-  }
-  observer.note(companions_note(lc));
-  const PhaseTimes::Scope timing = sim.times().measure("error estimate");
-  run.estimate = companions.get();  // rethrows a companion's Interrupted: nothing is written yet
-  for (const auto& warning : run.estimate->warnings()) observer.warning(warning);
+  if (run.companions.valid()) observer.note(companions_note(lc));
+  else run.estimate = estimate_error(sim, observer);
   return run;
 }
 
 /// Steps the simulation to the end of its load path, writing outputs and checkpoints; on
 /// SIGINT/SIGTERM it checkpoints after the increment in progress and stops.  Ends the folder's
 /// summary.json with the run's status; any exception marks the folder "failed" and propagates.
-RunReport drive(Simulation& sim, RunOutput& output, RunObserver& observer) {
+RunReport drive(Simulation& sim, RunOutput& output, RunObserver& observer, NewRun* pending = nullptr) {
   const auto start = std::chrono::steady_clock::now();
   const LoadCase& lc = sim.load_case();
   const fs::path checkpoint_dir = fs::path(lc.output.dir) / "checkpoints";
@@ -139,6 +131,21 @@ RunReport drive(Simulation& sim, RunOutput& output, RunObserver& observer) {
     return save_checkpoint(checkpoint_dir, make_checkpoint(sim, output.records(), output.free_surface_depths()),
                            schedule);
   };
+  // The estimate of companions still running (start_run): taken as soon as it is there, and
+  // waited for before a checkpoint and before the end, which need every row on disk.  The wait
+  // is the run's "error estimate" phase.
+  const auto settle_estimate = [&](bool wait) {
+    if (!pending || !pending->companions.valid()) return;
+    if (!wait && pending->companions.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
+    const PhaseTimes::Scope timing = sim.times().measure("error estimate");
+    try {
+      pending->estimate = pending->companions.get();
+      for (const auto& warning : pending->estimate->warnings()) observer.warning(warning);
+    } catch (const Interrupted&) {
+      pending->estimate.reset();  // stopped by the signal that stops the run: rows without estimate
+    }
+    output.set_error_estimate(pending->estimate.get());
+  };
   RunReport report;
   report.dir = lc.output.dir;
   report.curve_file = output.curve_path();
@@ -147,6 +154,7 @@ RunReport drive(Simulation& sim, RunOutput& output, RunObserver& observer) {
   try {
     try {
       sim.run([&](const IncrementRecord& r) {
+        settle_estimate(schedule.due(r.step));
         {
           const PhaseTimes::Scope timing = sim.times().measure("output");
           output.increment(sim, r);
@@ -157,6 +165,7 @@ RunReport drive(Simulation& sim, RunOutput& output, RunObserver& observer) {
         if (r.step > 0) observer.increment(r, planned, force_unit);
         if (const int signal = interruption_requested()) throw Interrupted(signal);
       });
+      settle_estimate(true);
       if (lc.output.checkpoint_every > 0 && last_checkpoint != output.records().back().step) {
         const PhaseTimes::Scope timing = sim.times().measure("output");
         checkpoint();
@@ -165,6 +174,7 @@ RunReport drive(Simulation& sim, RunOutput& output, RunObserver& observer) {
       report.status = RunStatus::not_converged;
       report.message = e.what();
     } catch (const Interrupted& i) {
+      settle_estimate(true);
       report.resume_checkpoint = checkpoint();
       report.status = RunStatus::stopped;
       report.stop_signal = i.signal();
@@ -172,6 +182,7 @@ RunReport drive(Simulation& sim, RunOutput& output, RunObserver& observer) {
                                    report.resume_checkpoint.string());
     }
     observer.increments_ended();
+    settle_estimate(true);
     {
       const PhaseTimes::Scope timing = sim.times().measure("output");
       output.finish(sim, report.status, report.message, sim.times());
@@ -179,6 +190,11 @@ RunReport drive(Simulation& sim, RunOutput& output, RunObserver& observer) {
     pass_warnings();
   } catch (const std::exception& e) {
     observer.increments_ended();
+    try {
+      settle_estimate(true);  // the rows held back, with or without their estimate
+    } catch (...) {
+      output.set_error_estimate(nullptr);
+    }
     output.fail(e.what());
     throw;
   }
@@ -218,13 +234,13 @@ RunReport run_load_case(LoadCase lc, RunObserver& observer) {
                               target->attempts.back().relative_error, lc.mesh.contact_nodes));
   }
   for (;;) {
-    const NewRun run = start_run(lc, observer);  // before anything is written
+    NewRun run = start_run(lc, observer);  // before anything is written
     Simulation& sim = *run.simulation;
     const auto& estimate = run.estimate;
     folder.clear_earlier_run();
-    RunOutput output(folder.dir(), lc, estimate.get());
+    RunOutput output = run.companions.valid() ? RunOutput(folder.dir(), lc, true) : RunOutput(folder.dir(), lc, estimate.get());
     if (target) output.set_target_choice(*target);
-    RunReport report = drive(sim, output, observer);
+    RunReport report = drive(sim, output, observer, &run);
     report.wall_seconds = seconds_since(start);
     if (!target || report.status != RunStatus::finished || target->attempts.size() > 1) return report;
     const std::optional<double> reached = relative_force_error(*estimate, output.records());
