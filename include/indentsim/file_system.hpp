@@ -30,6 +30,9 @@ public:
   AppendedFile(const AppendedFile&) = delete;
   AppendedFile& operator=(const AppendedFile&) = delete;
   void append(const std::string& text);
+  /// Replaces everything written so far with `text`, atomically (write_file_atomically), and
+  /// appends after it from then on.
+  void replace(const std::string& text);
   const std::filesystem::path& path() const { return path_; }
 
 private:

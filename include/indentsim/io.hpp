@@ -21,14 +21,15 @@ namespace indentsim {
 /// With an error estimate (mesh.error_estimate, error_estimate.hpp) three more columns before
 /// wall_s: P_error_estimate, a_error_estimate and P_extrapolated (empty where a companion run
 /// has no such increment).  An estimate still being computed (`estimate_pending`: the companions
-/// run beside the first increments) holds the rows back in memory until set_error_estimate.
+/// run beside the first increments) leaves the rows' estimate cells empty until
+/// set_error_estimate, which rewrites the file with them (atomically) and appends from then on.
 class CurveWriter {
 public:
   CurveWriter(const std::filesystem::path& file, const DiscretizationErrorEstimate* error_estimate = nullptr,
               bool estimate_pending = false);
 
   void write(const IncrementRecord& record);
-  /// The estimate has come (null: it will not, its cells stay empty): writes the rows held back.
+  /// The estimate has come (null: it will not, its cells stay empty): fills in the rows so far.
   void set_error_estimate(const DiscretizationErrorEstimate* error_estimate);
   static std::string header(bool with_error_estimate = false);
   /// A row; `with_estimate_columns` (default: when there is an estimate) writes the estimate's
@@ -113,9 +114,9 @@ public:
   RunOutput(const std::filesystem::path& dir, const LoadCase& load_case,
             const DiscretizationErrorEstimate* error_estimate = nullptr,
             const std::vector<IncrementRecord>& replay_curve = {}, const std::vector<double>& replay_depths = {});
-  /// A new run whose estimate is still being computed: curve.csv has its columns and holds its
-  /// rows back until set_error_estimate, which must come before a checkpoint (the rows up to a
-  /// checkpoint are on disk) and before finish().
+  /// A new run whose estimate is still being computed: curve.csv has its columns, left empty in
+  /// the rows until set_error_estimate fills them in, which must come before a checkpoint (a
+  /// resume keeps the rows up to it as they are on disk) and before finish().
   RunOutput(const std::filesystem::path& dir, const LoadCase& load_case, bool error_estimate_pending);
   /// The estimate of a run built with error_estimate_pending (null: none after all, e.g. its
   /// companions were stopped by a signal).  Must outlive this object.

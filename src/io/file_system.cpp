@@ -115,4 +115,12 @@ AppendedFile::~AppendedFile() {
 
 void AppendedFile::append(const std::string& text) { write_all(fd_, text.data(), text.size(), path_); }
 
+void AppendedFile::replace(const std::string& text) {
+  write_file_atomically(path_, text);
+  const int fd = ::open(path_.c_str(), O_WRONLY | O_APPEND | O_CLOEXEC);
+  if (fd < 0) throw_io_error(path_, "opening", errno);
+  ::close(fd_);
+  fd_ = fd;
+}
+
 }  // namespace indentsim

@@ -72,10 +72,12 @@ CurveWriter::CurveWriter(const std::filesystem::path& file, const Discretization
 void CurveWriter::set_error_estimate(const DiscretizationErrorEstimate* error_estimate) {
   error_estimate_ = error_estimate;
   pending_ = false;
-  std::string rows;
-  for (const IncrementRecord& r : held_) rows += format(r, error_estimate_, estimate_columns_) + "\n";
+  if (error_estimate_ && !held_.empty()) {
+    std::string text = header(estimate_columns_) + "\n";
+    for (const IncrementRecord& r : held_) text += format(r, error_estimate_, estimate_columns_) + "\n";
+    file_.replace(text);
+  }
   held_.clear();
-  if (!rows.empty()) file_.append(rows);
 }
 
 std::string CurveWriter::header(bool with_error_estimate) {
@@ -101,10 +103,7 @@ std::string CurveWriter::format(const IncrementRecord& r, const DiscretizationEr
 }
 
 void CurveWriter::write(const IncrementRecord& record) {
-  if (pending_) {
-    held_.push_back(record);
-    return;
-  }
+  if (pending_) held_.push_back(record);  // its estimate cells are filled in later
   file_.append(format(record, error_estimate_, estimate_columns_) + "\n");
 }
 
