@@ -87,7 +87,7 @@ struct NewRun {
 /// Plans a new run, builds its model and starts its companions.  The companions need only the
 /// load case and the plan, so where a second core is there they run on it while this thread
 /// builds the main run's model and steps its first increments (drive() takes their estimate as
-/// soon as it is there; curve.csv holds its rows back until then).  Each run is single-threaded
+/// soon as it is there; curve.csv's estimate cells stay empty until then).  Each run is single-threaded
 /// and deterministic (worker_threads.hpp), so the estimate is the same either way.  On one core
 /// the companions run after the model, as on a resume.
 NewRun start_run(const LoadCase& lc, RunObserver& observer) {
