@@ -127,6 +127,9 @@ struct NewtonReport {
   /// 1/rcond of CHOLMOD's factor): how much accuracy the factorization may lose.
   double condition_estimate = 0.0;
   int kinsol_flag = 0;
+  /// Not converged within its iterations, but its last iterate was its best: still converging
+  /// (another attempt may go on from it) rather than wandering or diverging.
+  bool stopped_while_converging = false;
   std::string message;          ///< KINSOL's own words when it failed
   std::vector<double> residual_history;  ///< max |F| / force_scale at each residual evaluation (the first 10 000)
 };
@@ -138,7 +141,9 @@ public:
   NewtonSolver(const NewtonSolver&) = delete;
   NewtonSolver& operator=(const NewtonSolver&) = delete;
 
-  /// Solves F(u; alpha) = 0 starting from u (the predictor), leaving the last iterate in u.
+  /// Solves F(u; alpha) = 0 starting from u (the predictor).  Converged, u is the solution; not
+  /// converged, u is the iterate of lowest residual (report.residual).  A predictor within the
+  /// tolerance is returned as it is, with 0 iterations.
   /// `max_iterations` (when > 0) caps this attempt below the settings' limit.
   NewtonReport solve(double alpha, std::vector<double>& u, Globalization globalization = Globalization::none,
                      int max_iterations = 0);

@@ -326,14 +326,19 @@ IncrementRecord Simulation::advance_to(double target) {
 
 // Full semi-smooth Newton steps first, for a quarter of the iteration budget (a converging
 // increment needs far fewer; one that wanders is better handed on); then the same trial with
-// KINSOL's line search and the whole budget.  The solution is left in system_guess_.
+// KINSOL's line search and the whole budget: from the predictor again, or, when the plain attempt
+// was still converging as its iterations ran out (a J2 cone's increments: linear convergence
+// while Gauss points cross the yield surface, then quadratic), from where it stopped.  (From the
+// best iterate of an attempt that cycled or diverged instead: as many iterations in all on the
+// cones' unloading, more on some.)  The solution is left in system_guess_.
 bool Simulation::solve_at(double trial, SolveCounters& counters, const std::function<void()>& stop_if_requested) {
   // Laws that follow the global load history (Ilyushin's unloading rule) need to know whether
   // this trial goes beyond the deepest point so far.
   if (plastic_) plastic_->set_loading(trial >= deepest_);
   const int plain_budget = std::max(8, load_case_.solver.max_newton / 4);
   for (Globalization g : {Globalization::none, Globalization::line_search}) {
-    predict(trial, counters.iterations, counters.factorizations);
+    if (g == Globalization::none || !last_report_.stopped_while_converging)
+      predict(trial, counters.iterations, counters.factorizations);
     last_report_ = newton_->solve(trial, system_guess_, g, g == Globalization::none ? plain_budget : 0);
     counters.iterations += last_report_.iterations;
     counters.factorizations += last_report_.factorizations;

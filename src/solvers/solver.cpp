@@ -109,6 +109,8 @@ struct NewtonSolver::Impl {
   double alpha = 0.0;
   std::string last_message;
   std::vector<double> residual_history;
+  double best_residual = 0.0;
+  std::vector<double> best_point;
   ActiveSetHistory active_sets;
   bool cycling = false;
   bool stop_on_cycling = true;
@@ -181,11 +183,23 @@ struct NewtonSolver::Impl {
     // KINSOL); the simulation then returns to its last converged increment.
     if (interruption_requested()) return -1;
     auto* me = static_cast<Impl*>(data);
-    me->equations.residual(N_VGetArrayPointer(u), me->alpha, N_VGetArrayPointer(f));
+    const double* point = N_VGetArrayPointer(u);
+    me->equations.residual(point, me->alpha, N_VGetArrayPointer(f));
+    const double norm = max_norm(f) / me->settings.force_scale;
     // Bounded: a solve that never converges must not grow memory without end.
-    if (me->residual_history.size() < max_residual_history)
-      me->residual_history.push_back(max_norm(f) / me->settings.force_scale);
+    if (me->residual_history.size() < max_residual_history) me->residual_history.push_back(norm);
+    me->remember_if_best(point, norm);
     return 0;
+  }
+
+  // The iterate of lowest residual so far in this solve: what a failed solve hands back (a
+  // plain attempt that ran out of iterations or diverged has usually passed closer to the
+  // solution than the predictor it started from).  KINSOL evaluates F at line-search trial
+  // points too; any point it evaluated is a point of the iteration.
+  void remember_if_best(const double* point, double norm) {
+    if (norm >= best_residual) return;
+    best_residual = norm;
+    best_point.assign(point, point + equations.size());
   }
 
   // The fixed pattern and the Jacobian's values at u into the matrix the direct solver factors.
@@ -315,6 +329,21 @@ NewtonReport NewtonSolver::solve(double alpha, std::vector<double>& u, Globaliza
   const long analyses_before = total_symbolic_analyses();
 
   NewtonReport report;
+  // A predictor that already satisfies the tolerance is the solution (an unloaded specimen off
+  // the punch, a step along an elastic unloading that the extrapolation got exactly).  KINSOL
+  // would accept it only below 1% of the tolerance and otherwise factor a Jacobian for a step
+  // of nothing.
+  const double initial = m.scaled_residual(data);
+  m.residual_history.push_back(initial);
+  m.best_residual = initial;
+  m.best_point = u;
+  if (initial <= m.settings.tolerance) {
+    report.converged = true;
+    report.residual = initial;
+    report.residual_history = m.residual_history;
+    return report;
+  }
+  m.residual_history.clear();  // KINSOL's own first evaluation records it again
   const int strategy = globalization == Globalization::line_search ? KIN_LINESEARCH : KIN_NONE;
   report.kinsol_flag = KINSol(m.kinsol, m.u.get(), strategy, m.u_scale.get(), m.f_scale.get());
   long iterations = 0;
@@ -334,7 +363,15 @@ NewtonReport NewtonSolver::solve(double alpha, std::vector<double>& u, Globaliza
   report.converged = report.kinsol_flag >= 0 && report.residual <= m.settings.tolerance;
   report.message = m.cycling ? "active-set cycling between contact sets detected" : m.last_message;
   report.residual_history = m.residual_history;
-  std::copy(data, data + u.size(), u.begin());
+  report.stopped_while_converging = !report.converged && report.kinsol_flag == KIN_MAXITER_REACHED &&
+                                    report.residual <= m.best_residual;
+  // Converged: the solution.  Not converged: the best iterate, with its residual.
+  if (report.converged || m.best_residual >= report.residual) {
+    std::copy(data, data + u.size(), u.begin());
+  } else {
+    u = m.best_point;
+    report.residual = m.best_residual;
+  }
   return report;
 }
 
