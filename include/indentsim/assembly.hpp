@@ -114,8 +114,11 @@ public:
   long plastic_points() const override { return 0; }
   double max_strain_intensity() const override { return max_strain_intensity_; }
   std::array<GaussPointState, 4> gauss_point_states(int ei, int ej) const override;
-  const ElementMatrix& cached_matrix(int ei, int ej) const {
-    return by_class_[mesh_.column_class(ei) * mesh_.height_classes() + mesh_.height_class(ej)];
+  const ElementMatrix& cached_matrix(int ei, int ej) const { return by_class_[class_of(ei, ej)]; }
+  /// B at the 2x2 Gauss points of element (ei, ej), from the same table of classes as its matrix
+  /// (recomputing them for every element at every increment was a sixth of a small elastic run).
+  const std::array<StrainDisplacement, 4>& strain_displacements(int ei, int ej) const {
+    return b_by_class_[class_of(ei, ej)];
   }
   const std::vector<double>& values() const { return values_; }
   const Mesh& mesh() const { return mesh_; }
@@ -124,9 +127,16 @@ public:
   void multiply(const double* u, double* f) const { pattern_.multiply(values_, u, f); }
 
 private:
+  std::size_t class_of(int ei, int ej) const {
+    return static_cast<std::size_t>(mesh_.column_class(ei)) * mesh_.height_classes() + mesh_.height_class(ej);
+  }
+  /// Strains at the Gauss points of element (ei, ej) from the global u.
+  std::array<VoigtVector, 4> strains(int ei, int ej, const double* u) const;
+
   const Mesh& mesh_;
   const StiffnessPattern& pattern_;
   std::vector<ElementMatrix, Eigen::aligned_allocator<ElementMatrix>> by_class_;
+  std::vector<std::array<StrainDisplacement, 4>, Eigen::aligned_allocator<std::array<StrainDisplacement, 4>>> b_by_class_;
   std::vector<double> values_;
   LameConstants lame_;
   std::vector<double> committed_u_;

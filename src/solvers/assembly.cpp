@@ -126,11 +126,14 @@ ElasticStiffness::ElasticStiffness(const Mesh& mesh, const ElasticMaterial& mate
   const LameConstants lame = material.lame();
   lame_ = lame;
   by_class_.resize(static_cast<std::size_t>(mesh.column_classes()) * mesh.height_classes());
+  b_by_class_.resize(by_class_.size());
   for (int c = 0; c < mesh.column_classes(); ++c)
     for (int h = 0; h < mesh.height_classes(); ++h) {
       Rectangle rect = columns[c];
       rect.height = heights[h];
       by_class_[c * mesh.height_classes() + h] = mesh.kinematics().elastic_stiffness(rect, lame, mesh.element_kind());
+      b_by_class_[c * mesh.height_classes() + h] =
+          mesh.kinematics().gauss_point_strain_displacements(rect, mesh.element_kind());
     }
 
   values_.assign(static_cast<std::size_t>(pattern.nonzeros()), 0.0);
@@ -149,8 +152,7 @@ void ElasticStiffness::commit(const double* u) {
   double largest = 0.0;
   for (int ei = 0; ei < mesh_.elements_x(); ++ei)
     for (int ej = 0; ej < mesh_.elements_y(); ++ej)
-      for (const VoigtVector& strain : gauss_point_strains(mesh_, ei, ej, u))
-        largest = std::max(largest, strain_intensity(strain));
+      for (const VoigtVector& strain : strains(ei, ej, u)) largest = std::max(largest, strain_intensity(strain));
   max_strain_intensity_ = largest;
 }
 
@@ -162,13 +164,21 @@ void ElasticStiffness::restore(const std::vector<double>& history, const double*
 std::array<GaussPointState, 4> ElasticStiffness::gauss_point_states(int ei, int ej) const {
   std::array<GaussPointState, 4> states;
   if (committed_u_.empty()) return states;
-  const auto strains = gauss_point_strains(mesh_, ei, ej, committed_u_.data());
+  const auto eps = strains(ei, ej, committed_u_.data());
   const ConstitutiveMatrix d = isotropic_stiffness(lame_);
   for (int g = 0; g < 4; ++g) {
-    states[g].stress = d * strains[g];
-    states[g].strain_intensity = strain_intensity(strains[g]);
+    states[g].stress = d * eps[g];
+    states[g].strain_intensity = strain_intensity(eps[g]);
   }
   return states;
+}
+
+std::array<VoigtVector, 4> ElasticStiffness::strains(int ei, int ej, const double* u) const {
+  const ElementVector ue = gather(mesh_, ei, ej, u);
+  const auto& b = strain_displacements(ei, ej);
+  std::array<VoigtVector, 4> eps;
+  for (std::size_t g = 0; g < b.size(); ++g) eps[g] = b[g] * ue;
+  return eps;
 }
 
 std::array<VoigtVector, 4> gauss_point_strains(const Mesh& mesh, int ei, int ej, const double* u) {
