@@ -115,11 +115,10 @@ public:
   double max_strain_intensity() const override { return max_strain_intensity_; }
   std::array<GaussPointState, 4> gauss_point_states(int ei, int ej) const override;
   const ElementMatrix& cached_matrix(int ei, int ej) const { return by_class_[class_of(ei, ej)]; }
-  /// B at the 2x2 Gauss points of element (ei, ej), from the same table of classes as its matrix
-  /// (recomputing them for every element at every increment was a sixth of a small elastic run).
-  const std::array<StrainDisplacement, 4>& strain_displacements(int ei, int ej) const {
-    return b_by_class_[class_of(ei, ej)];
-  }
+  /// B and the measure at the 2x2 Gauss points of element (ei, ej), tabulated per class like its
+  /// matrix: every element pass (strains, inelastic forces and tangents) reads them here
+  /// (recomputing B for every element at every increment was a sixth of a small elastic run).
+  const ElementQuadrature& quadrature(int ei, int ej) const { return quadrature_by_class_[class_of(ei, ej)]; }
   const std::vector<double>& values() const { return values_; }
   const Mesh& mesh() const { return mesh_; }
   const StiffnessPattern& pattern() const { return pattern_; }
@@ -136,7 +135,7 @@ private:
   const Mesh& mesh_;
   const StiffnessPattern& pattern_;
   std::vector<ElementMatrix, Eigen::aligned_allocator<ElementMatrix>> by_class_;
-  std::vector<std::array<StrainDisplacement, 4>, Eigen::aligned_allocator<std::array<StrainDisplacement, 4>>> b_by_class_;
+  std::vector<ElementQuadrature, Eigen::aligned_allocator<ElementQuadrature>> quadrature_by_class_;
   std::vector<double> values_;
   LameConstants lame_;
   std::vector<double> committed_u_;

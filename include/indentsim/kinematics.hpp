@@ -21,6 +21,21 @@
 
 namespace indentsim {
 
+/// The 2x2 Gauss rule on one rectangle, evaluated once: B at each point of gauss_points_2x2() and
+/// the body each point stands for (its weight times the measure).  Every element integral is a
+/// sum over these four; elements of one class of equal rectangles share one (ElasticStiffness).
+struct ElementQuadrature {
+  std::array<StrainDisplacement, 4> b;
+  std::array<double, 4> volume{};
+
+  /// (eps11, eps22, gamma12, eps33) at each point from the element's 8 unknowns (paper order).
+  std::array<VoigtVector, 4> strains(const ElementVector& ue) const;
+  /// sum_g B_g^T D_g B_g dV_g
+  ElementMatrix stiffness(const std::array<ConstitutiveMatrix, 4>& d) const;
+  /// sum_g B_g^T sigma_g dV_g
+  ElementVector internal_force(const std::array<VoigtVector, 4>& stress) const;
+};
+
 class Kinematics {
 public:
   virtual ~Kinematics() = default;
@@ -58,6 +73,8 @@ public:
   /// The output name of stress component 33 (sigma33 out of plane; sigma_hoop).
   virtual std::string out_of_plane_stress() const = 0;
 
+  /// B and the measure at the four Gauss points of the rectangle.
+  ElementQuadrature quadrature(const Rectangle& rect, ElementKind kind) const;
   /// Stiffness by 2x2 Gauss quadrature with one constitutive matrix per Gauss point.
   ElementMatrix stiffness(const Rectangle& rect, const std::array<ConstitutiveMatrix, 4>& d, ElementKind kind) const;
   ElementMatrix stiffness(const Rectangle& rect, const ConstitutiveMatrix& d, ElementKind kind) const {

@@ -40,23 +40,39 @@ std::array<StrainDisplacement, 4> Kinematics::gauss_point_strain_displacements(c
   return b;
 }
 
+ElementQuadrature Kinematics::quadrature(const Rectangle& rect, ElementKind kind) const {
+  ElementQuadrature q;
+  q.b = gauss_point_strain_displacements(rect, kind);
+  const auto& points = gauss_points_2x2();
+  for (std::size_t g = 0; g < points.size(); ++g) q.volume[g] = points[g].weight * measure(rect, points[g].xi);
+  return q;
+}
+
 ElementMatrix Kinematics::stiffness(const Rectangle& rect, const std::array<ConstitutiveMatrix, 4>& d,
                                     ElementKind kind) const {
-  ElementMatrix k = ElementMatrix::Zero();
-  const auto& points = gauss_points_2x2();
-  const std::array<StrainDisplacement, 4> b = gauss_point_strain_displacements(rect, kind);
-  for (std::size_t g = 0; g < points.size(); ++g)
-    k.noalias() += (points[g].weight * measure(rect, points[g].xi)) * b[g].transpose() * d[g] * b[g];
-  return k;
+  return quadrature(rect, kind).stiffness(d);
 }
 
 ElementVector Kinematics::internal_force(const Rectangle& rect, const std::array<VoigtVector, 4>& stress,
                                          ElementKind kind) const {
+  return quadrature(rect, kind).internal_force(stress);
+}
+
+std::array<VoigtVector, 4> ElementQuadrature::strains(const ElementVector& ue) const {
+  std::array<VoigtVector, 4> eps;
+  for (std::size_t g = 0; g < b.size(); ++g) eps[g] = b[g] * ue;
+  return eps;
+}
+
+ElementMatrix ElementQuadrature::stiffness(const std::array<ConstitutiveMatrix, 4>& d) const {
+  ElementMatrix k = ElementMatrix::Zero();
+  for (std::size_t g = 0; g < b.size(); ++g) k.noalias() += volume[g] * b[g].transpose() * d[g] * b[g];
+  return k;
+}
+
+ElementVector ElementQuadrature::internal_force(const std::array<VoigtVector, 4>& stress) const {
   ElementVector f = ElementVector::Zero();
-  const auto& points = gauss_points_2x2();
-  const std::array<StrainDisplacement, 4> b = gauss_point_strain_displacements(rect, kind);
-  for (std::size_t g = 0; g < points.size(); ++g)
-    f.noalias() += (points[g].weight * measure(rect, points[g].xi)) * b[g].transpose() * stress[g];
+  for (std::size_t g = 0; g < b.size(); ++g) f.noalias() += volume[g] * b[g].transpose() * stress[g];
   return f;
 }
 

@@ -147,7 +147,7 @@ bool InelasticBulk::inelastic(int ei, int ej, const double* u, std::array<VoigtV
 }
 
 bool InelasticBulk::inelastic(int ei, int ej, const ElementVector& ue, std::array<VoigtVector, 4>& strains) const {
-  strains = gauss_point_strains(mesh_, ei, ej, ue);
+  strains = elastic_.quadrature(ei, ej).strains(ue);
   const std::size_t first = 4 * static_cast<std::size_t>(mesh_.element(ei, ej));
   for (std::size_t g = 0; g < 4; ++g)
     if (!law_->elastic(first + g, strains[g])) return true;
@@ -168,7 +168,7 @@ ElementVector InelasticBulk::element_force(int ei, int ej, const std::array<Voig
     stresses[g] = r.stress;
     if (tangents) (*tangents)[g] = r.tangent;
   }
-  return mesh_.kinematics().internal_force(mesh_.rectangle(ei, ej), stresses, mesh_.element_kind());
+  return elastic_.quadrature(ei, ej).internal_force(stresses);
 }
 
 void InelasticBulk::add_force_corrections(const std::vector<ElementSlot>& slots, const double* u, double* f) const {
@@ -204,8 +204,7 @@ void InelasticBulk::add_tangent_corrections(const std::vector<ElementSlot>& slot
       for (std::size_t g = 0; g < 4; ++g) d[g] = law_->respond(first + g, strains[g]).tangent;
     }
     const ElementMatrix correction =
-        mesh_.kinematics().stiffness(mesh_.rectangle(slot.ei, slot.ej), d, mesh_.element_kind()) -
-        elastic_.cached_matrix(slot.ei, slot.ej);
+        elastic_.quadrature(slot.ei, slot.ej).stiffness(d) - elastic_.cached_matrix(slot.ei, slot.ej);
     for (int p = 0; p < 64; ++p)
       if (slot.positions[p] >= 0) values[slot.positions[p]] += correction(p / 8, p % 8);
   }
@@ -226,8 +225,7 @@ bool InelasticBulk::add_parameter_derivative(const std::vector<ElementSlot>& slo
       stress_derivatives[g] = *d;
     }
     // f_e = int B^T sigma is linear in the stresses (B-bar included).
-    const ElementVector d_force =
-        mesh_.kinematics().internal_force(mesh_.rectangle(slot.ei, slot.ej), stress_derivatives, mesh_.element_kind());
+    const ElementVector d_force = elastic_.quadrature(slot.ei, slot.ej).internal_force(stress_derivatives);
     for (int a = 0; a < 8; ++a)
       if (slot.unknowns[a] >= 0) df[slot.unknowns[a]] += d_force[a];
   }
@@ -243,7 +241,7 @@ void InelasticBulk::record_strain_derivatives(const std::vector<ElementSlot>& sl
   ElementVector due;
   for (const ElementSlot& slot : slots) {
     for (int a = 0; a < 8; ++a) due[a] = slot.unknowns[a] < 0 ? 0.0 : du[slot.unknowns[a]];
-    const std::array<VoigtVector, 4> strains = gauss_point_strains(mesh_, slot.ei, slot.ej, due);
+    const std::array<VoigtVector, 4> strains = elastic_.quadrature(slot.ei, slot.ej).strains(due);
     const std::size_t first = 4 * static_cast<std::size_t>(mesh_.element(slot.ei, slot.ej));
     for (std::size_t g = 0; g < 4; ++g) d_strain[first + g] = strains[g];
   }
@@ -268,7 +266,7 @@ void InelasticBulk::commit(const double* u) {
   max_strain_intensity_ = 0.0;
   for (int ei = 0; ei < mesh_.elements_x(); ++ei)
     for (int ej = 0; ej < mesh_.elements_y(); ++ej) {
-      const auto strains = gauss_point_strains(mesh_, ei, ej, u);
+      const auto strains = elastic_.quadrature(ei, ej).strains(gather(mesh_, ei, ej, u));
       const std::size_t first = 4 * static_cast<std::size_t>(mesh_.element(ei, ej));
       for (std::size_t g = 0; g < 4; ++g) {
         max_strain_intensity_ = std::max(max_strain_intensity_, strain_intensity(strains[g]));
@@ -295,7 +293,7 @@ void InelasticBulk::restore(const std::vector<double>& h, const double* u) {
 }
 
 std::array<GaussPointState, 4> InelasticBulk::gauss_point_states(int ei, int ej) const {
-  const auto strains = gauss_point_strains(mesh_, ei, ej, committed_u_.data());
+  const auto strains = elastic_.quadrature(ei, ej).strains(gather(mesh_, ei, ej, committed_u_.data()));
   const std::size_t first = 4 * static_cast<std::size_t>(mesh_.element(ei, ej));
   std::array<GaussPointState, 4> states;
   for (std::size_t g = 0; g < 4; ++g) {

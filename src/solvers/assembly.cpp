@@ -126,14 +126,13 @@ ElasticStiffness::ElasticStiffness(const Mesh& mesh, const ElasticMaterial& mate
   const LameConstants lame = material.lame();
   lame_ = lame;
   by_class_.resize(static_cast<std::size_t>(mesh.column_classes()) * mesh.height_classes());
-  b_by_class_.resize(by_class_.size());
+  quadrature_by_class_.resize(by_class_.size());
   for (int c = 0; c < mesh.column_classes(); ++c)
     for (int h = 0; h < mesh.height_classes(); ++h) {
       Rectangle rect = columns[c];
       rect.height = heights[h];
       by_class_[c * mesh.height_classes() + h] = mesh.kinematics().elastic_stiffness(rect, lame, mesh.element_kind());
-      b_by_class_[c * mesh.height_classes() + h] =
-          mesh.kinematics().gauss_point_strain_displacements(rect, mesh.element_kind());
+      quadrature_by_class_[c * mesh.height_classes() + h] = mesh.kinematics().quadrature(rect, mesh.element_kind());
     }
 
   values_.assign(static_cast<std::size_t>(pattern.nonzeros()), 0.0);
@@ -174,11 +173,7 @@ std::array<GaussPointState, 4> ElasticStiffness::gauss_point_states(int ei, int 
 }
 
 std::array<VoigtVector, 4> ElasticStiffness::strains(int ei, int ej, const double* u) const {
-  const ElementVector ue = gather(mesh_, ei, ej, u);
-  const auto& b = strain_displacements(ei, ej);
-  std::array<VoigtVector, 4> eps;
-  for (std::size_t g = 0; g < b.size(); ++g) eps[g] = b[g] * ue;
-  return eps;
+  return quadrature(ei, ej).strains(gather(mesh_, ei, ej, u));
 }
 
 std::array<VoigtVector, 4> gauss_point_strains(const Mesh& mesh, int ei, int ej, const double* u) {
