@@ -328,9 +328,10 @@ IncrementRecord Simulation::advance_to(double target) {
 // increment needs far fewer; one that wanders is better handed on); then the same trial with
 // KINSOL's line search and the whole budget: from the predictor again, or, when the plain attempt
 // was still converging as its iterations ran out (a J2 cone's increments: linear convergence
-// while Gauss points cross the yield surface, then quadratic), from where it stopped.  (From the
-// best iterate of an attempt that cycled or diverged instead: as many iterations in all on the
-// cones' unloading, more on some.)  The solution is left in system_guess_.
+// while Gauss points cross the yield surface, then quadratic), from where it stopped.  (Going on
+// from the best iterate of an attempt that cycled or diverged was tried too: on the cones'
+// unloading it took as many iterations in all, on some increments more.)  The solution is left in
+// system_guess_.
 bool Simulation::solve_at(double trial, SolveCounters& counters, const std::function<void()>& stop_if_requested) {
   // Laws that follow the global load history (Ilyushin's unloading rule) need to know whether
   // this trial goes beyond the deepest point so far.
