@@ -142,9 +142,5 @@ private:
   double max_strain_intensity_ = 0.0;
 };
 
-/// Strain (eps11, eps22, gamma12, eps33) at each 2x2 Gauss point of element (ei, ej).
-std::array<VoigtVector, 4> gauss_point_strains(const Mesh& mesh, int ei, int ej, const double* u);
-/// The same from the element's 8 unknowns (paper order).
-std::array<VoigtVector, 4> gauss_point_strains(const Mesh& mesh, int ei, int ej, const ElementVector& ue);
 
 }  // namespace indentsim

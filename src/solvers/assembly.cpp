@@ -176,18 +176,6 @@ std::array<VoigtVector, 4> ElasticStiffness::strains(int ei, int ej, const doubl
   return quadrature(ei, ej).strains(gather(mesh_, ei, ej, u));
 }
 
-std::array<VoigtVector, 4> gauss_point_strains(const Mesh& mesh, int ei, int ej, const double* u) {
-  return gauss_point_strains(mesh, ei, ej, gather(mesh, ei, ej, u));
-}
-
-std::array<VoigtVector, 4> gauss_point_strains(const Mesh& mesh, int ei, int ej, const ElementVector& ue) {
-  const std::array<StrainDisplacement, 4> b =
-      mesh.kinematics().gauss_point_strain_displacements(mesh.rectangle(ei, ej), mesh.element_kind());
-  std::array<VoigtVector, 4> strains;
-  for (std::size_t g = 0; g < b.size(); ++g) strains[g] = b[g] * ue;
-  return strains;
-}
-
 std::vector<ElementSlot> whole_mesh_slots(const Mesh& mesh, const StiffnessPattern& pattern) {
   std::vector<ElementSlot> slots;
   slots.reserve(static_cast<std::size_t>(mesh.elements()));
