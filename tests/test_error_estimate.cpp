@@ -201,7 +201,7 @@ TEST_F(HeldRows, CurveRowsAreFilledInWhenTheEstimateComesAndMatchTheOnesWrittenW
   ASSERT_EQ(early.size(), rows.size() + 1);
   EXPECT_EQ(early[0], CurveWriter::header(true));
   EXPECT_NE(early[2].find(",,,"), std::string::npos) << early[2];  // not yet estimated
-  held.set_error_estimate(&estimate);
+  held.set_error_estimate(&estimate, rows);
   held.write(rows.back());  // a later row goes straight to the file
   std::vector<std::string> expected = lines(dir_ / "at_once.csv");
   expected.push_back(expected.back());
@@ -212,7 +212,7 @@ TEST_F(HeldRows, CurveRowsAreFilledInWhenTheEstimateComesAndMatchTheOnesWrittenW
   // No estimate after all (its companions stopped by a signal): the same columns, left empty.
   CurveWriter none(dir_ / "none.csv", nullptr, true);
   none.write(rows[1]);
-  none.set_error_estimate(nullptr);
+  none.set_error_estimate(nullptr, {rows[1]});
   const auto written = lines(dir_ / "none.csv");
   ASSERT_EQ(written.size(), 2u);
   EXPECT_NE(written[1].find(",,,"), std::string::npos) << written[1];

@@ -29,8 +29,10 @@ public:
               bool estimate_pending = false);
 
   void write(const IncrementRecord& record);
-  /// The estimate has come (null: it will not, its cells stay empty): fills in the rows so far.
-  void set_error_estimate(const DiscretizationErrorEstimate* error_estimate);
+  /// The estimate has come (null: it will not, its cells stay empty): rewrites the file with
+  /// `rows_written`, the rows written so far (RunOutput keeps them), its cells filled in.
+  void set_error_estimate(const DiscretizationErrorEstimate* error_estimate,
+                          const std::vector<IncrementRecord>& rows_written);
   static std::string header(bool with_error_estimate = false);
   /// A row; `with_estimate_columns` (default: when there is an estimate) writes the estimate's
   /// cells, empty where it has nothing for the row.
@@ -40,8 +42,7 @@ public:
 private:
   AppendedFile file_;
   const DiscretizationErrorEstimate* error_estimate_;
-  bool estimate_columns_ = false, pending_ = false;
-  std::vector<IncrementRecord> held_;
+  bool estimate_columns_ = false;
 };
 
 /// How a run ended, as summary.json says in "status": "running" from its first write until it

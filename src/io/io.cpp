@@ -62,22 +62,17 @@ std::string to_string(RunStatus status) {
 
 CurveWriter::CurveWriter(const std::filesystem::path& file, const DiscretizationErrorEstimate* error_estimate,
                          bool estimate_pending)
-    : file_(file),
-      error_estimate_(error_estimate),
-      estimate_columns_(error_estimate != nullptr || estimate_pending),
-      pending_(estimate_pending && error_estimate == nullptr) {
+    : file_(file), error_estimate_(error_estimate), estimate_columns_(error_estimate != nullptr || estimate_pending) {
   file_.append(header(estimate_columns_) + "\n");
 }
 
-void CurveWriter::set_error_estimate(const DiscretizationErrorEstimate* error_estimate) {
+void CurveWriter::set_error_estimate(const DiscretizationErrorEstimate* error_estimate,
+                                     const std::vector<IncrementRecord>& rows_written) {
   error_estimate_ = error_estimate;
-  pending_ = false;
-  if (error_estimate_ && !held_.empty()) {
-    std::string text = header(estimate_columns_) + "\n";
-    for (const IncrementRecord& r : held_) text += format(r, error_estimate_, estimate_columns_) + "\n";
-    file_.replace(text);
-  }
-  held_.clear();
+  if (!error_estimate_ || rows_written.empty()) return;
+  std::string text = header(estimate_columns_) + "\n";
+  for (const IncrementRecord& r : rows_written) text += format(r, error_estimate_, estimate_columns_) + "\n";
+  file_.replace(text);
 }
 
 std::string CurveWriter::header(bool with_error_estimate) {
@@ -103,7 +98,6 @@ std::string CurveWriter::format(const IncrementRecord& r, const DiscretizationEr
 }
 
 void CurveWriter::write(const IncrementRecord& record) {
-  if (pending_) held_.push_back(record);  // its estimate cells are filled in later
   file_.append(format(record, error_estimate_, estimate_columns_) + "\n");
 }
 
@@ -217,7 +211,7 @@ RunOutput::RunOutput(const std::filesystem::path& dir, const LoadCase& load_case
 
 void RunOutput::set_error_estimate(const DiscretizationErrorEstimate* error_estimate) {
   error_estimate_ = error_estimate;
-  curve_.set_error_estimate(error_estimate);
+  curve_.set_error_estimate(error_estimate, records_);
 }
 
 RunOutput::RunOutput(const std::filesystem::path& dir, const LoadCase& load_case,
