@@ -146,3 +146,28 @@ TEST(ElasticContact, ObservedConvergenceOrderOfTheForceIsAtLeastOne) {
   RecordProperty("observed_order", fmt::format("{:.3f}", order));
   EXPECT_GE(order, 1.0) << force[0] << " " << force[1] << " " << force[2];
 }
+
+// A rigid wedge on an elastic half-plane: a pressure bounded at the edges of the contact carries
+// P = a E* cot(theta) per unit thickness (the 2-D punch problem; the force needs no depth of the
+// block, unlike the approach).  And the mesh planner's estimate of the contact half-width
+// (PunchShape::contact_estimate) must put that contact inside the fine zone with about the
+// contact_nodes asked for: the rule of Hertz's cylinder applied to a wedge put it pi/2 too narrow.
+TEST(ElasticContact, WedgeForceFollowsTheHalfPlaneSolutionInsideItsPlannedFineZone) {
+  LoadCase lc = indentsim::testing::shipped_case("hertz_thick_block.toml", {"mesh.error_estimate=off"});
+  lc.punch.shape = PunchShapeKind::cone;
+  lc.punch.half_angle = 80.0;
+  validate(lc);
+  Simulation sim(lc);
+  const double cot = 1.0 / std::tan(80.0 * std::numbers::pi / 180.0);
+  IncrementRecord last;
+  sim.run([&](const IncrementRecord& r) {
+    if (r.step < 4) return;  // a contact of several nodes
+    const double p_wedge = r.half_width * indentsim::testing::contact_modulus(lc) * cot;
+    EXPECT_NEAR(r.force / p_wedge, 1.0, 0.01) << "alpha = " << r.alpha;
+    last = r;
+  });
+  for (const std::string& w : sim.warnings()) EXPECT_EQ(w.find("left the fine mesh zone"), std::string::npos) << w;
+  EXPECT_GE(last.contact_nodes, 0.8 * lc.mesh.contact_nodes);
+  EXPECT_LE(last.contact_nodes, 1.25 * lc.mesh.contact_nodes);
+  EXPECT_NEAR(last.half_width / sim.plan().contact_half_width_estimate, 1.0, 0.15);
+}

@@ -40,9 +40,10 @@ public:
   /// The contact radius expected at depth alpha on an elastic block of depth `block_depth` (to
   /// size the mesh).  Axisymmetry: Sneddon's depth of a smooth axisymmetric punch,
   ///   alpha = a int_0^{pi/2} g'(a sin phi) dphi        (Sneddon 1965, eq. 6.1),
-  /// solved for a.  Plane strain: alpha = g(a) [ln(2d/a) - nu/(2(1-nu))] (Johnson, Contact
-  /// Mechanics §5.6, for a parabolic profile; the same form for any profile is a sizing rule,
-  /// not a theorem).  Never beyond the geometric radius.
+  /// solved for a.  Plane strain: alpha = (2/pi) (P/E*) [ln(2d/a) - nu/(2(1-nu))] with the
+  /// half-plane's P/E* = a int_0^{pi/2} g'(a sin phi) sin phi dphi of a pressure bounded at the
+  /// edges (Johnson, Contact Mechanics §5.6 for Hertz's cylinder; for other profiles the
+  /// logarithm is a sizing rule).  Never beyond the geometric radius.
   virtual double contact_estimate(SceneKind scene, double alpha, double block_depth, double nu) const;
   /// A warning when the depth pushes the small-slope model (vertical gap) beyond its range.
   virtual std::optional<std::string> slope_warning(double /*alpha*/) const { return std::nullopt; }

@@ -53,9 +53,25 @@ double PunchShape::contact_estimate(SceneKind scene, double alpha, double block_
     };
     return invert_increasing(depth_of, alpha, geometric);
   }
+  // Plane strain: a smooth symmetric punch whose pressure stays bounded at the edges x = +-a of
+  // its contact carries P / E* = int_0^a g'(x) x / sqrt(a^2 - x^2) dx = a int_0^{pi/2} g'(a sin phi)
+  // sin phi dphi (the 2-D punch problem: pi a^2 / 4R for Hertz's cylinder, a cot(theta) for a
+  // wedge).  A 2-D contact's approach has meaning only against a depth d, and is set by that
+  // force: alpha = (2 / pi) (P / E*) [ln(2d/a) - nu/(2(1-nu))], which for the cylinder is
+  // Johnson's (Contact Mechanics §5.6; hertz.hpp).  The form g(a) [ln ...] taken for every
+  // profile before is the cylinder's only: it put an elastic wedge's contact pi/2 too narrow,
+  // outside its fine zone.  64-point midpoint rule.
   const double poisson_term = nu / (2.0 * (1.0 - nu));
   const auto depth_of = [&](double a) {
-    return surface_height(a) * std::max(1.0, std::log(2.0 * block_depth / a) - poisson_term);
+    const int n = 64;
+    double sum = 0.0;
+    for (int k = 0; k < n; ++k) {
+      const double s = std::sin((k + 0.5) * std::numbers::pi / (2.0 * n));
+      sum += slope(a * s) * s;
+    }
+    const double force_over_modulus = a * sum * std::numbers::pi / (2.0 * n);
+    return 2.0 / std::numbers::pi * force_over_modulus *
+           std::max(1.0, std::log(2.0 * block_depth / a) - poisson_term);
   };
   return invert_increasing(depth_of, alpha, geometric);
 }
