@@ -104,6 +104,24 @@ TEST_P(PlasticHistory, UnloadingToSeparationAndBackIntoContact) {
   EXPECT_GE(h.most_tensile_contact_force, -1e-9 * h.summary.peak_force());
 }
 
+// Off the punch the specimen carries no load, so its displacement cannot change while the punch
+// rises: every increment that starts clear of the punch on the way up has its answer in the
+// predictor, and takes no Newton iteration (the secant of the releasing increment would go on
+// springing back, and Newton would have to undo it).
+TEST_P(PlasticHistory, IncrementsStartingClearOfThePunchNeedNoNewtonIteration) {
+  const History h = run_history(GetParam(), "[0, 5e-5, 0]", "[8, 16]");
+  int clear = 0;
+  for (std::size_t k = 1; k < h.curve.size(); ++k) {
+    const IncrementRecord &before = h.curve[k - 1], &r = h.curve[k];
+    if (before.step < 8 || before.force != 0.0) continue;
+    ASSERT_LT(r.alpha, before.alpha);
+    EXPECT_EQ(r.newton_iterations, 0) << "step " << r.step;
+    EXPECT_EQ(r.force, 0.0) << "step " << r.step;
+    ++clear;
+  }
+  EXPECT_GE(clear, 2);
+}
+
 INSTANTIATE_TEST_SUITE_P(Models, PlasticHistory, ::testing::Values("ilyushin", "j2"),
                          [](const ::testing::TestParamInfo<std::string>& info) { return info.param; });
 

@@ -167,6 +167,8 @@ private:
   IncrementRecord record(double wall_seconds, long iterations, long factorizations, int cutbacks);
   /// Initial guess for depth `trial` into guess_ (counts any solve it needs).
   void predict(double trial, long& iterations, long& factorizations);
+  /// Every surface node of the committed state strictly below the punch (no contact, no load).
+  bool clear_of_punch() const;
   void check_fine_zone(double half_width);
   /// (Re)builds the Newton system for near_: condensation, operators, contact, KINSOL.
   void build_system();
