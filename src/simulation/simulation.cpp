@@ -334,9 +334,10 @@ IncrementRecord Simulation::advance_to(double target) {
 // Plain steps first, as before, took 16% more Newton iterations and 10% more factorizations
 // over 110 random load cases of both scenes, every shape and material (none took 2% fewer), in
 // the same wall time (the damped steps keep a factorization longer, at more GMRES iterations);
-// on the shipped unloading cases they were 6-10% slower.  (Going on from the best iterate of an attempt that cycled or diverged was
-// tried too: on the cones' unloading it took as many iterations in all, on some increments
-// more.)  The solution is left in system_guess_.
+// on the shipped unloading cases they were 6-10% slower (benchmarks/random_cases.py).  (Going
+// on from the best iterate of an attempt that cycled or diverged was tried too: on the cones'
+// unloading it took as many iterations in all, on some increments more.)  The solution is left
+// in system_guess_.
 bool Simulation::solve_at(double trial, SolveCounters& counters, const std::function<void()>& stop_if_requested) {
   // Laws that follow the global load history (Ilyushin's unloading rule) need to know whether
   // this trial goes beyond the deepest point so far.
@@ -375,8 +376,10 @@ void Simulation::predict(double trial, long& iterations, long& factorizations) {
   // any shallower depth (and is the best start for a deeper one), where the secant would go on
   // with the springback of the increment that released it (the Berkovich cone: 8 Newton
   // iterations for an increment with nothing to solve).
-  if (has_previous_ && !virgin && !clear_of_punch()) extrapolate(u_previous_, alpha_previous_, u_, alpha_, trial, guess_);
-  else guess_ = u_;
+  if (has_previous_ && !virgin && !clear_of_punch())
+    extrapolate(u_previous_, alpha_previous_, u_, alpha_, trial, guess_);
+  else
+    guess_ = u_;
   to_system(guess_, system_guess_);
   if (!virgin || !plastic_) return;
   // The elastic contact solution at the same depth settles the contact set before plasticity
