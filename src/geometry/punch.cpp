@@ -27,6 +27,17 @@ double invert_increasing(F f, double target, double upper) {
   return hi;
 }
 
+/// int_0^{pi/2} f(sin phi) dphi by the 64-point midpoint rule: the integrals of a punch's slope
+/// over its contact (below), enough for a mesh size.
+template <class F>
+double quarter_turn_integral(F f) {
+  constexpr int n = 64;
+  constexpr double width = std::numbers::pi / (2.0 * n);
+  double sum = 0.0;
+  for (int k = 0; k < n; ++k) sum += f(std::sin((k + 0.5) * width));
+  return sum * width;
+}
+
 /// A radius where g(r) >= alpha (+inf beyond a rim counts), by doubling.
 double radius_above(const PunchShape& shape, double alpha) {
   double r = 1e-12;
@@ -44,13 +55,8 @@ double PunchShape::contact_estimate(SceneKind scene, double alpha, double block_
   const double geometric = geometric_contact_radius(alpha);
   if (scene == SceneKind::axisymmetric) {
     // Sneddon's depth h(a) = a int_0^{pi/2} g'(a sin phi) dphi, increasing in a for a convex
-    // (or any rising) profile: 64-point midpoint rule, enough for a mesh size.
-    const auto depth_of = [&](double a) {
-      const int n = 64;
-      double sum = 0.0;
-      for (int k = 0; k < n; ++k) sum += slope(a * std::sin((k + 0.5) * std::numbers::pi / (2.0 * n)));
-      return a * sum * std::numbers::pi / (2.0 * n);
-    };
+    // (or any rising) profile.
+    const auto depth_of = [&](double a) { return a * quarter_turn_integral([&](double s) { return slope(a * s); }); };
     return invert_increasing(depth_of, alpha, geometric);
   }
   // Plane strain: a smooth symmetric punch whose pressure stays bounded at the edges x = +-a of
@@ -60,16 +66,10 @@ double PunchShape::contact_estimate(SceneKind scene, double alpha, double block_
   // force: alpha = (2 / pi) (P / E*) [ln(2d/a) - nu/(2(1-nu))], which for the cylinder is
   // Johnson's (Contact Mechanics §5.6; hertz.hpp).  The form g(a) [ln ...] taken for every
   // profile before is the cylinder's only: it put an elastic wedge's contact pi/2 too narrow,
-  // outside its fine zone.  64-point midpoint rule.
+  // outside its fine zone.
   const double poisson_term = nu / (2.0 * (1.0 - nu));
   const auto depth_of = [&](double a) {
-    const int n = 64;
-    double sum = 0.0;
-    for (int k = 0; k < n; ++k) {
-      const double s = std::sin((k + 0.5) * std::numbers::pi / (2.0 * n));
-      sum += slope(a * s) * s;
-    }
-    const double force_over_modulus = a * sum * std::numbers::pi / (2.0 * n);
+    const double force_over_modulus = a * quarter_turn_integral([&](double s) { return slope(a * s) * s; });
     return 2.0 / std::numbers::pi * force_over_modulus *
            std::max(1.0, std::log(2.0 * block_depth / a) - poisson_term);
   };
