@@ -77,8 +77,11 @@ def draw_case(rng):
 def run(binary, case, out):
     """(Newton iterations, factorizations, wall seconds) of one run, or the error's last line."""
     start = time.monotonic()
-    proc = subprocess.run([binary, "run", str(case), "--out", str(out), "-q"], capture_output=True, text=True,
-                          timeout=600)
+    try:
+        proc = subprocess.run([binary, "run", str(case), "--out", str(out), "-q"], capture_output=True, text=True,
+                              timeout=600)
+    except subprocess.TimeoutExpired:
+        return "no result after 600 s"
     seconds = time.monotonic() - start
     if proc.returncode != 0:
         return (proc.stderr.strip().splitlines() or ["exit status %d" % proc.returncode])[-1]
