@@ -142,5 +142,4 @@ private:
   double max_strain_intensity_ = 0.0;
 };
 
-
 }  // namespace indentsim
