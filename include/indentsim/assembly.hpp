@@ -17,13 +17,18 @@ class StiffnessPattern {
 public:
   explicit StiffnessPattern(const Mesh& mesh);
   /// A symmetric pattern given column by column (sorted rows, the diagonal present); it has no
-  /// element positions (element_positions is not available).  For a condensed system.
-  StiffnessPattern(std::vector<std::int64_t> column_start, std::vector<std::int64_t> row_index);
+  /// element positions (element_positions is not available).  For a condensed system, whose
+  /// interface unknowns (`dense_block`, increasing) are coupled all to all.
+  StiffnessPattern(std::vector<std::int64_t> column_start, std::vector<std::int64_t> row_index,
+                   std::vector<std::int64_t> dense_block = {});
 
   std::int64_t size() const { return size_; }
   std::int64_t nonzeros() const { return static_cast<std::int64_t>(row_index_.size()); }
   const std::vector<std::int64_t>& column_start() const { return column_start_; }
   const std::vector<std::int64_t>& row_index() const { return row_index_; }
+  /// Unknowns coupled all to all (a condensed near field's interface, docs/DESIGN.md §7; empty
+  /// for a mesh's own pattern).  A fill-reducing order eliminates them last, as one block.
+  const std::vector<std::int64_t>& dense_block() const { return dense_block_; }
 
   /// Position in the value array of local entry (a, b) of an element, or -1 when either
   /// unknown is fixed by a Dirichlet condition.  64 entries per element, row-major.
@@ -39,7 +44,7 @@ public:
 
 private:
   std::int64_t size_ = 0;
-  std::vector<std::int64_t> column_start_, row_index_, diagonal_;
+  std::vector<std::int64_t> column_start_, row_index_, diagonal_, dense_block_;
   std::vector<std::int32_t> element_position_;
 };
 

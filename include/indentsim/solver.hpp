@@ -156,6 +156,9 @@ public:
 
   long total_factorizations() const;
   long total_symbolic_analyses() const;
+  /// Entries of the direct solver's factors (KLU: L and U; CHOLMOD: L), 0 before the first
+  /// factorization: the fill its fill-reducing order left.
+  long factor_nonzeros() const;
 
 private:
   struct Impl;

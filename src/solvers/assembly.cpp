@@ -61,12 +61,17 @@ StiffnessPattern::StiffnessPattern(const Mesh& mesh) : size_(mesh.equations()) {
     }
 }
 
-StiffnessPattern::StiffnessPattern(std::vector<std::int64_t> column_start, std::vector<std::int64_t> row_index)
+StiffnessPattern::StiffnessPattern(std::vector<std::int64_t> column_start, std::vector<std::int64_t> row_index,
+                                   std::vector<std::int64_t> dense_block)
     : size_(static_cast<std::int64_t>(column_start.size()) - 1),
       column_start_(std::move(column_start)),
-      row_index_(std::move(row_index)) {
+      row_index_(std::move(row_index)),
+      dense_block_(std::move(dense_block)) {
   if (size_ < 0 || column_start_.back() != static_cast<std::int64_t>(row_index_.size()))
     throw std::invalid_argument("inconsistent compressed-column pattern");
+  for (std::size_t k = 0; k < dense_block_.size(); ++k)
+    if (dense_block_[k] < 0 || dense_block_[k] >= size_ || (k > 0 && dense_block_[k] <= dense_block_[k - 1]))
+      throw std::invalid_argument("dense block: unknowns out of range or not increasing");
   diagonal_.assign(static_cast<std::size_t>(size_), -1);
   for (std::int64_t c = 0; c < size_; ++c) {
     const auto first = row_index_.begin() + column_start_[c];

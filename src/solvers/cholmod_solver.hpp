@@ -9,7 +9,9 @@
 // symmetric positive definite matrix (pinned rows and columns reduced to their diagonal).  This is
 // exact for any matrix of that shape; which rows are pinned is read off the matrix at each setup.
 // The symbolic analysis (fill-reducing ordering, supernodes) is done once per pattern.
+#include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "sparse_direct_solver.hpp"
 
@@ -17,7 +19,9 @@ namespace indentsim {
 
 class CholmodSolver final : public SparseDirectSolver {
 public:
-  explicit CholmodSolver(SUNContext context);
+  /// `dense_block`: the unknowns of the pattern to come that are coupled all to all
+  /// (StiffnessPattern::dense_block), which the fill-reducing order puts last.
+  explicit CholmodSolver(SUNContext context, std::vector<std::int64_t> dense_block = {});
   ~CholmodSolver() override;
   CholmodSolver(const CholmodSolver&) = delete;
   CholmodSolver& operator=(const CholmodSolver&) = delete;
@@ -27,6 +31,7 @@ public:
   void keep_factor_once() override;
   void clear_keep_factor() override;
   long symbolic_analyses() const override;
+  long factor_nonzeros() const override;
   /// 1 / rcond of the last factor (CHOLMOD's cheap estimate from the diagonal of L).
   double condition_estimate() const override;
 

@@ -139,7 +139,8 @@ FarFieldCondensation::FarFieldCondensation(const ElasticStiffness& stiffness, co
     row_index.insert(row_index.end(), rows_of_column.begin(), rows_of_column.end());
     column_start[r + 1] = static_cast<std::int64_t>(row_index.size());
   }
-  pattern_ = std::make_unique<StiffnessPattern>(std::move(column_start), std::move(row_index));
+  pattern_ = std::make_unique<StiffnessPattern>(std::move(column_start), std::move(row_index),
+                                                std::vector<std::int64_t>(interface_.begin(), interface_.end()));
   const auto position = [&](std::int64_t row, std::int64_t col) {
     const auto& cs = pattern_->column_start();
     const auto& ri = pattern_->row_index();

@@ -9,7 +9,7 @@
 #include <nvector/nvector_serial.h>
 #include <sunmatrix/sunmatrix_sparse.h>
 
-#include "cholmod_common.hpp"
+#include "fill_reducing_order.hpp"
 
 namespace indentsim {
 
@@ -19,43 +19,6 @@ static_assert(sizeof(SuiteSparse_long) == sizeof(sunindextype),
 // A refactorization whose reciprocal condition estimate falls below this lost the accuracy of its
 // pivots: eps^(2/3), the threshold SUNLinSol_KLU applies after klu_refactor.
 static const double refactor_rcond_limit = std::pow(std::numeric_limits<double>::epsilon(), 2.0 / 3.0);
-
-namespace {
-
-// A fill-reducing order of a structurally symmetric pattern: CHOLMOD's nested dissection (METIS
-// bisections, constrained minimum degree on the parts), postordered.  On the near fields of
-// plastic runs it leaves less fill than AMD as the mesh is refined -- nnz(L+U) 0.78 M against
-// 0.86 M and 17% fewer flops at 11 000 unknowns (deep_plastic.toml, contact_nodes 30); refactor
-// and solves take 7% less of the whole run there and 14% at contact_nodes 48 -- because a 2-D
-// mesh's separators are what nested dissection is made for.  Empty if CHOLMOD fails (then AMD).
-std::vector<SuiteSparse_long> nested_dissection_order(std::vector<SuiteSparse_long>& column_start,
-                                                      std::vector<SuiteSparse_long>& row_index) {
-  const auto n = static_cast<std::size_t>(column_start.size() - 1);
-  CholmodCommon cholmod;
-  cholmod_common* cm = &cholmod.common;
-  cm->nmethods = 1;
-  cm->method[0].ordering = CHOLMOD_NESDIS;
-  cm->postorder = 1;
-  cholmod_sparse pattern{};
-  pattern.nrow = pattern.ncol = n;
-  pattern.nzmax = static_cast<std::size_t>(column_start[n]);
-  pattern.p = column_start.data();
-  pattern.i = row_index.data();
-  pattern.stype = 1;  // the upper triangle stands for the whole (symmetric) pattern
-  pattern.itype = CHOLMOD_LONG;
-  pattern.xtype = CHOLMOD_PATTERN;
-  pattern.dtype = CHOLMOD_DOUBLE;
-  pattern.sorted = 1;
-  pattern.packed = 1;
-  cholmod_factor* symbolic = analyze_serialized(&pattern, cm);
-  if (!symbolic) return {};
-  const auto* perm = static_cast<const SuiteSparse_long*>(symbolic->Perm);
-  std::vector<SuiteSparse_long> order(perm, perm + n);
-  cholmod_l_free_factor(&symbolic, cm);
-  return order;
-}
-
-}  // namespace
 
 struct KluSolver::State {
   klu_l_common common{};
@@ -84,11 +47,12 @@ struct KluSolver::State {
   State& operator=(const State&) = delete;
 
   // The pattern's symbolic analysis, and the reference factorization that fixes the pivots.
-  bool analyse(std::vector<SuiteSparse_long> columns, std::vector<SuiteSparse_long> rows, double* values) {
+  bool analyse(std::vector<SuiteSparse_long> columns, std::vector<SuiteSparse_long> rows,
+               const std::vector<std::int64_t>& dense_block, double* values) {
     column_start = std::move(columns);
     row_index = std::move(rows);
     const auto n = static_cast<SuiteSparse_long>(column_start.size() - 1);
-    std::vector<SuiteSparse_long> order = nested_dissection_order(column_start, row_index);
+    std::vector<std::int64_t> order = fill_reducing_order(column_start, row_index, dense_block);
     symbolic = order.empty()
                    ? klu_l_analyze(n, column_start.data(), row_index.data(), &common)
                    : klu_l_analyze_given(n, column_start.data(), row_index.data(), order.data(), order.data(), &common);
@@ -142,7 +106,7 @@ int setup(SUNLinearSolver s, SUNMatrix a) {
     const auto n = static_cast<std::size_t>(SUNSparseMatrix_Columns(a));
     const sunindextype* colptr = SUNSparseMatrix_IndexPointers(a);
     const sunindextype* rowind = SUNSparseMatrix_IndexValues(a);
-    if (!k.analyse({colptr, colptr + n + 1}, {rowind, rowind + colptr[n]}, SUNSparseMatrix_Data(a)))
+    if (!k.analyse({colptr, colptr + n + 1}, {rowind, rowind + colptr[n]}, {}, SUNSparseMatrix_Data(a)))
       return k.last_flag = SUNLS_PACKAGE_FAIL_UNREC;
     ++k.numeric_factorizations;
     k.estimate_condition_of(a);
@@ -171,15 +135,20 @@ KluSolver::KluSolver(SUNContext context)
 
 KluSolver::~KluSolver() = default;
 
-void KluSolver::analyse(const std::vector<std::int64_t>& column_start, const std::vector<std::int64_t>& row_index,
-                        std::vector<double> reference_values) {
+void KluSolver::analyse(const StiffnessPattern& pattern, std::vector<double> reference_values) {
+  const auto& column_start = pattern.column_start();
+  const auto& row_index = pattern.row_index();
   if (!state_->analyse({column_start.begin(), column_start.end()}, {row_index.begin(), row_index.end()},
-                       reference_values.data()))
+                       pattern.dense_block(), reference_values.data()))
     throw std::runtime_error(fmt::format("KLU could not factor the elastic stiffness of the Newton system (status {})",
                                          state_->common.status));
 }
 long KluSolver::numeric_factorizations() const { return state_->numeric_factorizations; }
 long KluSolver::symbolic_analyses() const { return state_->symbolic_analyses; }
+long KluSolver::factor_nonzeros() const {
+  const klu_l_numeric* reference = state_->reference;
+  return reference ? static_cast<long>(reference->lnz + reference->unz) : 0;
+}
 void KluSolver::keep_factor_once() { state_->keep_factor = true; }
 void KluSolver::clear_keep_factor() { state_->keep_factor = false; }
 void KluSolver::estimate_condition_at_next_setup() { state_->estimate_condition = true; }

@@ -6,7 +6,8 @@
 // (every increment), and SUNLinSol_KLU's forces a new symbolic analysis and a full factorization
 // there (../shared/STACK.md).  The pattern of a Newton system never changes, so this solver
 // analyses it once, in CHOLMOD's nested-dissection order (less fill than AMD on a refined mesh;
-// AMD leaves 2-3x less than KLU's default COLAMD on these matrices).
+// AMD leaves 2-3x less than KLU's default COLAMD on these matrices), with a condensed system's
+// dense interface block last.
 //
 // Pivots chosen once, on a matrix of the mesh alone.  KLU's factorization with partial pivoting
 // (klu_factor) chooses a pivot sequence; klu_refactor computes the factors of another matrix of the
@@ -24,6 +25,7 @@
 #include <memory>
 #include <vector>
 
+#include "indentsim/assembly.hpp"
 #include "sparse_direct_solver.hpp"
 
 namespace indentsim {
@@ -35,16 +37,17 @@ public:
   KluSolver(const KluSolver&) = delete;
   KluSolver& operator=(const KluSolver&) = delete;
 
-  /// Analyses the pattern (CSC, the pattern of every matrix to come) and factors the reference
-  /// matrix whose pivots every later factorization reuses: part of building a Newton system, not
-  /// counted among numeric_factorizations().  Without it, the first matrix set up is analysed and
-  /// becomes the reference.  Throws std::runtime_error when KLU cannot factor the reference.
-  void analyse(const std::vector<std::int64_t>& column_start, const std::vector<std::int64_t>& row_index,
-               std::vector<double> reference_values);
+  /// Analyses the pattern (the pattern of every matrix to come; its dense block is ordered last)
+  /// and factors the reference matrix whose pivots every later factorization reuses: part of
+  /// building a Newton system, not counted among numeric_factorizations().  Without it, the first
+  /// matrix set up is analysed and becomes the reference.  Throws std::runtime_error when KLU
+  /// cannot factor the reference.
+  void analyse(const StiffnessPattern& pattern, std::vector<double> reference_values);
 
   SUNLinearSolver get() const override { return shell_.get(); }
   long numeric_factorizations() const override;
   long symbolic_analyses() const override;
+  long factor_nonzeros() const override;
   void keep_factor_once() override;
   void clear_keep_factor() override;
   void estimate_condition_at_next_setup() override;

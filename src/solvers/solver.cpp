@@ -132,12 +132,12 @@ struct NewtonSolver::Impl {
         kinsol(context) {
     if (!jacobian) throw std::runtime_error("SUNSparseMatrix failed");
     if (settings.linear == LinearSolverKind::cholmod) {
-      direct = std::make_unique<CholmodSolver>(context);
+      direct = std::make_unique<CholmodSolver>(context, eq.pattern().dense_block());
     } else {
       auto klu = std::make_unique<KluSolver>(context);
       std::vector<double> reference(static_cast<std::size_t>(eq.pattern().nonzeros()));
       if (equations.pivot_reference(reference.data()))
-        klu->analyse(eq.pattern().column_start(), eq.pattern().row_index(), std::move(reference));
+        klu->analyse(eq.pattern(), std::move(reference));
       direct = std::move(klu);
     }
 
@@ -406,5 +406,6 @@ void NewtonSolver::solve_linearized(const std::vector<double>& u, double alpha,
 
 long NewtonSolver::total_factorizations() const { return impl_->direct->numeric_factorizations(); }
 long NewtonSolver::total_symbolic_analyses() const { return impl_->direct->symbolic_analyses(); }
+long NewtonSolver::factor_nonzeros() const { return impl_->direct->factor_nonzeros(); }
 
 }  // namespace indentsim

@@ -18,6 +18,9 @@ public:
   virtual SUNLinearSolver get() const = 0;
   virtual long numeric_factorizations() const = 0;
   virtual long symbolic_analyses() const = 0;
+  /// Entries of the factors of the current symbolic analysis (KLU: L and U; CHOLMOD: L), 0
+  /// before the first: the fill the ordering left, what each factorization and solve works on.
+  virtual long factor_nonzeros() const = 0;
   /// The next setup keeps the current factor instead of factoring its matrix (a chord step).
   virtual void keep_factor_once() = 0;
   /// Withdraws a pending keep_factor_once (the next setup factors its matrix).
