@@ -7,9 +7,10 @@
 namespace indentsim {
 
 /// A permutation of the unknowns of a symmetric pattern (CSC, every column's rows sorted, both
-/// triangles stored): CHOLMOD's nested dissection (METIS bisections, constrained minimum degree on
-/// the parts, postordered) of the unknowns outside `dense_block`, then `dense_block` itself.
-/// Empty if CHOLMOD fails.
+/// triangles stored), postordered: CHOLMOD's nested dissection (METIS bisections, constrained
+/// minimum degree on the parts) of the whole pattern, or -- when `dense_block` (unknowns coupled
+/// all to all) is given and this leaves a smaller Cholesky factor -- the nested dissection of the
+/// unknowns outside the block followed by the block.  Empty if CHOLMOD fails.
 std::vector<std::int64_t> fill_reducing_order(const std::vector<std::int64_t>& column_start,
                                               const std::vector<std::int64_t>& row_index,
                                               const std::vector<std::int64_t>& dense_block);
