@@ -1,0 +1,436 @@
+"""CalculiX 2.20 decks of indentsim's scenes, node for node on indentsim's own mesh.
+
+The deck is built from an indentsim run folder: its `case.toml` (every key explicit), the depths of
+its `curve.csv`, the grid of its `fields/step_000000.vtu` and, for the contact set, the nodes'
+`contact_status` in the fields of every increment.  Both codes then solve the same discrete
+problem, so their forces must agree to the solvers' tolerances on any mesh; what differs is only
+the implementation (elements, constitutive update, equilibrium iterations).
+
+  * elements: CPE4 (plane strain, thickness 1 m) or CAX4 (axisymmetric: x = r, y = z), bilinear
+    with full 2x2 integration -- indentsim's Q1 (run it with mesh.element = "q1");
+  * the base fixed, the axis x = 0 held in x, the far side free (MODEL.md);
+  * material: elastic, or J2 flow theory with isotropic hardening (*PLASTIC).  indentsim's J2 law
+    takes its hardening curve from the Ilyushin law of the same parameters: on a proportional path
+    the equivalent plastic strain is eps_p = e_u omega(e_u) and the yield stress
+    sigma_u = 3 mu (1 - omega(e_u)) e_u (include/indentsim/material.hpp).  The linear law is two
+    points of ccx's table (exact); the power law is tabulated densely (ccx interpolates linearly:
+    the table's own error is below 1e-5 of the stress).  Ilyushin's deformation theory has no
+    counterpart in ccx;
+  * the punch profile g(x) of MODEL.md is written out here again (sphere, cone with or without a
+    spherical tip, flat), independently of src/geometry/punch.cpp.
+Two ways to impose the contact:
+  * contact = "given" (any scene): one ccx *STEP per indentsim increment (*STATIC, DIRECT: one
+    increment, so J2's backward-Euler update sees the same strain increments in both codes), the
+    surface nodes indentsim found in contact prescribed to the punch, u_y = -alpha_k + g(x)
+    (*BOUNDARY, OP=NEW), the others free.  ccx then solves the elasto-plastic equilibrium alone,
+    and its own solution is checked against the Signorini conditions (check_signorini): every
+    prescribed node pushed on, never pulled, and no free node through the punch.  Together with
+    equal forces this says indentsim's contact set and state solve the discrete problem;
+  * contact = "gap" (monotone elastic scenes): ccx finds the contact itself, one GAPUNI element
+    from each surface node within reach to one rigid punch node, direction (0, 1, 0), clearance
+    g(x): exactly the vertical-gap condition.  On plastic scenes ccx's Newton iterations do not
+    converge with gap elements stiff enough to leave P unchanged (tried: fixed and automatic
+    increments, gap stiffness 1e4 to 1e9 E h): hence the given contact set there.
+CalculiX pitfalls met on the way:
+  * numbers on data lines are read in 20-character fields: 13 significant digits fit;
+  * GAPUNI elements alone do not make a *STATIC step nonlinear: ccx solves once, linearly, and
+    the contact is wrong.  A *PLASTIC material that no element uses switches on its Newton
+    iterations (small strains, no NLGEOM);
+  * the clearance belongs to the *GAP card, so every gap element gets its own element set;
+  * an open GAPUNI still pulls, with a force rising to f_inf (the *GAP card's 7th value, 1e-3 N by
+    default) as it opens: on an axisymmetric wedge that was 40% of the first increment's force;
+  * the gap stiffness is a penalty: 1e4 E h (h the finest element) left the paper's P 7% low, and
+    1e9 E h leaves it unchanged to the printed digits;
+  * an axisymmetric model is expanded into a 2-degree wedge of straight-sided hexahedra: its
+    forces are those of the wedge, so the whole ring's force is 180 times the printed one, and the
+    wedge's geometry differs from the exact ring's by O(1 degree^2): on elastic scenes ccx's P is
+    2.5-2.8e-5 below indentsim's at every increment, a constant offset, independent of the gap
+    stiffness and of the contact mode;
+  * ccx's default convergence test is on the residual relative to the average force
+    (R_alpha^n = 0.005): tightened here (*CONTROLS) for the given contact set;
+  * the .dat file prints 7 significant digits, so ccx's P is known to about 2.5e-7.
+"""
+
+import base64
+import math
+import os
+import re
+import subprocess
+import time
+import tomllib
+import xml.etree.ElementTree as ET
+
+import numpy as np
+
+
+class DeckError(Exception):
+    """A scene this deck builder does not cover, or a ccx failure; the message says which."""
+
+
+# ---------------------------------------------------------------------------------------------
+# The run folder
+
+
+def point_arrays(vtu):
+    """{name: array} of a VTU's point data and its point coordinates (indentsim's binary VTU:
+    base64 with a UInt64 byte count in front)."""
+    piece = ET.parse(vtu).getroot().find("UnstructuredGrid").find("Piece")
+    dtypes = {"Float64": "<f8", "Int32": "<i4"}
+
+    def decode(array):
+        raw = base64.b64decode("".join(array.text.split()))
+        size = int.from_bytes(raw[:8], "little")
+        values = np.frombuffer(raw[8:8 + size], dtype=dtypes[array.get("type")])
+        components = int(array.get("NumberOfComponents", "1"))
+        return values.reshape(-1, components) if components > 1 else values
+
+    arrays = {a.get("Name"): decode(a) for a in piece.find("PointData").findall("DataArray")}
+    arrays["coordinates"] = decode(next(a for a in piece.find("Points").findall("DataArray")
+                                        if a.get("Name") == "coordinates"))
+    return arrays
+
+
+def read_run(run_dir):
+    """The scene of an indentsim run folder: its load case, depths, forces, grid and, where the
+    fields of every increment were written, the surface nodes in contact at each."""
+    with open(run_dir / "case.toml", "rb") as f:
+        case = tomllib.load(f)
+    with open(run_dir / "curve.csv") as f:
+        header = f.readline().strip().split(",")
+        rows = [line.split(",") for line in f.read().strip().splitlines()]
+    column = {name: [float(r[header.index(name)]) for r in rows]
+              for name in ("alpha", "P", "a", "cutbacks", "max_strain_intensity")}
+    if any(column["cutbacks"]):
+        raise DeckError(f"{run_dir}: the run cut increments back; ccx would step differently (J2 is path dependent)")
+    first = point_arrays(run_dir / "fields" / "step_000000.vtu")
+    points = first["coordinates"]
+    xs, ys = np.unique(points[:, 0]), np.unique(points[:, 1])
+    if len(xs) * len(ys) != len(points):
+        raise DeckError(f"{run_dir}: the mesh is not a tensor-product grid")
+    # The deck numbers node (i, j) -- i along x, j up from the base -- as j nx + i + 1; `order`
+    # lists indentsim's point index for each, wherever indentsim puts it in its own numbering.
+    x_index, row = np.searchsorted(xs, points[:, 0]), np.searchsorted(ys, points[:, 1])
+    order = np.empty(len(points), dtype=int)
+    order[row * len(xs) + x_index] = np.arange(len(points))
+    top = order[(len(ys) - 1) * len(xs):]
+    contact_sets, displacements = [], []
+    for k in range(len(rows)):
+        vtu = run_dir / "fields" / f"step_{k:06d}.vtu"
+        if not vtu.exists():
+            contact_sets = displacements = None
+            break
+        arrays = point_arrays(vtu)
+        contact_sets.append([i for i in range(len(xs)) if arrays["contact_status"][top[i]] == 1])  # -1: no candidate, 0: open
+        displacements.append(arrays["displacement"][order, :2])
+    return dict(case=case, kind=case["geometry"]["kind"], alphas=column["alpha"], forces=column["P"],
+                half_widths=column["a"], largest_strain_intensity=max(column["max_strain_intensity"]), xs=xs, ys=ys,
+                contact_sets=contact_sets, displacements=displacements)
+
+
+# ---------------------------------------------------------------------------------------------
+# The scene's physics, written out again from MODEL.md
+
+
+def punch_gap(punch):
+    """g(x) of MODEL.md ('Punch and contact', the axisymmetric profiles) and the largest x where the
+    punch has a surface."""
+    shape = punch["shape"]
+    if shape == "sphere":
+        radius = punch["radius"]
+        return (lambda x: x * x / (radius + math.sqrt((radius - x) * (radius + x)))), 0.999 * radius
+    if shape == "cone":
+        theta = math.radians(punch["half_angle"])
+        tip = punch.get("tip_radius", 0.0)
+        cap = tip * math.cos(theta)  # where the tip sphere's slope equals the face's, cot(theta)
+        cap_height = tip - math.sqrt(tip * tip - cap * cap)
+
+        def cone(x):
+            if x < cap:
+                return x * x / (tip + math.sqrt((tip - x) * (tip + x)))
+            return cap_height + (x - cap) / math.tan(theta)
+
+        return cone, math.inf
+    if shape == "flat":
+        return (lambda x: 0.0), punch["radius"] * (1.0 + 1e-12)
+    raise DeckError(f"punch.shape = \"{shape}\": only sphere, cone and flat are built here")
+
+
+def hardening_table(material, largest_strain_intensity, points=100):
+    """ccx's *PLASTIC table (von Mises stress, equivalent plastic strain) of indentsim's J2 law, up to
+    twice the largest strain intensity of the run (beyond its last point ccx's curve is flat)."""
+    E, nu, e0 = material["E"], material["nu"], material["e0"]
+    mu = E / (2.0 * (1.0 + nu))
+    if material["hardening"] == "linear":
+        kappa = material["kappa"]
+        if kappa == 0.0:
+            raise DeckError("material.kappa = 0 is elastic: no plastic flow to compare")
+        # omega = kappa (1 - e0/e_u): sigma_u = 3 mu e0 + 3 mu (1 - kappa)(e_u - e0), eps_p = kappa (e_u - e0).
+        slope = 3.0 * mu * (1.0 - kappa) / kappa
+        top = 100.0
+        return [(3.0 * mu * e0, 0.0), (3.0 * mu * e0 + slope * top, top)]
+    n = material["n"]
+    # omega = 1 - (e0/e_u)^(1-n): sigma_u = 3 mu e0 (e_u/e0)^n, eps_p = e_u - sigma_u / (3 mu), at
+    # points evenly spaced in log e_u: linear interpolation between them is off by about
+    # n (1 - n) (log step)^2 / 8 of the stress (3e-6 for n = 0.2 and 100 points up to 4 e0).
+    table = [(3.0 * mu * e0, 0.0)]
+    for ratio in np.geomspace(1.0 + 1e-9, max(2.0, 2.0 * largest_strain_intensity / e0), points):
+        stress = 3.0 * mu * e0 * ratio ** n
+        table.append((stress, e0 * ratio - stress / (3.0 * mu)))
+    return table
+
+
+def expected_difference(scene, points=100):
+    """How far ccx's P may lie from indentsim's, relative to the peak P, on a correct scene: the
+    sources of difference the deck itself brings, each bounded from its own error:
+      * 1e-6: ccx's 7 printed digits and both codes' equilibrium tolerances (measured 1e-8 to 2e-7
+        on the plane-strain scenes with an elastic or linear-hardening specimen);
+      * axisymmetry: twice (1 degree)^2, the straight-sided 2-degree wedge's departure from the ring
+        (measured 1.6e-4 to 3.0e-4);
+      * the power law's table: n (1 - n) (log step)^2 / 8, the largest relative error of linear
+        interpolation between the table's points (on power_law.toml with J2 and on the Berkovich cone
+        in plane strain it gives 1.8e-5 and 2.7e-5; measured: 2.6e-6 and 4.0e-6 in P, 7.6e-6 and
+        2.1e-5 in the residual).
+    The same allowance bounds the residual of a replay."""
+    allowed = 1e-6
+    if scene["kind"] == "axisymmetric":
+        allowed += 2.0 * math.radians(1.0) ** 2
+    material = scene["case"]["material"]
+    if material["model"] == "j2" and material["hardening"] == "power":
+        step = math.log(max(2.0, 2.0 * scene["largest_strain_intensity"] / material["e0"])) / (points - 1)
+        allowed += material["n"] * (1.0 - material["n"]) * step * step / 8.0
+    return allowed
+
+
+def length_unit(scene):
+    """The deck's unit of length: the specimen's height.  ccx refuses elements whose Jacobian
+    determinant is below an absolute threshold ("nonpositive jacobian"), which a Berkovich cone's
+    0.3 mm specimen, expanded into a 2-degree wedge, reaches in metres."""
+    return scene["case"]["geometry"]["ly"]
+
+
+def force_scale(scene):
+    """From ccx's printed force [N] to indentsim's P: both halves of the plane-strain model, whose
+    thickness is one length unit [N/m], the whole ring from the 2-degree wedge [N]; compression
+    positive."""
+    return {"plane_strain": -2.0 / length_unit(scene), "axisymmetric": -180.0}[scene["kind"]]
+
+
+# ---------------------------------------------------------------------------------------------
+# The deck
+
+
+def write_deck(path, scene, contact="given"):
+    """The deck; returns the number of free displacement unknowns of the 2-D model.  Lengths in
+    units of length_unit(scene), forces in newtons (stresses in N per unit length squared)."""
+    unit = length_unit(scene)
+    case, xs, ys = scene["case"], scene["xs"] / unit, scene["ys"] / unit
+    material, punch = case["material"], case["punch"]
+    stress_unit = 1.0 / (unit * unit)  # pascals per deck stress unit
+    if material["model"] not in ("elastic", "j2"):
+        raise DeckError(f"material.model = \"{material['model']}\": ccx has no Ilyushin (deformation) law; "
+                        "compare with model = \"j2\"")
+    if case["mesh"].get("element") != "q1":
+        raise DeckError("mesh.element must be \"q1\": ccx's CPE4/CAX4 have no mean-dilatation (B-bar) variant")
+    if contact in ("given", "replay") and scene["contact_sets"] is None:
+        raise DeckError("the contact set of every increment needs the run's fields at every increment "
+                        "(output.fields_every = 1)")
+    gap_m, rim_m = punch_gap(punch)
+    gap, rim = (lambda x: gap_m(x * unit) / unit), rim_m / unit
+    element = {"plane_strain": "CPE4", "axisymmetric": "CAX4"}[scene["kind"]]
+    nx, ny = len(xs), len(ys)
+    node = lambda i, j: j * nx + i + 1  # j = 0 the base, j = ny - 1 the loaded surface
+    lines = ["*HEADING", f"indentsim scene, {scene['kind']}, {punch['shape']}, {material['model']}, {nx} x {ny} nodes",
+             "*NODE, NSET=NALL"]
+    w = lines.append
+    for j in range(ny):
+        for i in range(nx):
+            w(f"{node(i, j)}, {xs[i]:.12e}, {ys[j]:.12e}, 0.0")
+    w(f"*ELEMENT, TYPE={element}, ELSET=EBLOCK")
+    e = 0
+    for j in range(ny - 1):
+        for i in range(nx - 1):
+            e += 1
+            w(f"{e}, {node(i, j)}, {node(i + 1, j)}, {node(i + 1, j + 1)}, {node(i, j + 1)}")
+    w("*NSET, NSET=BASE")
+    lines.extend(f"{node(i, 0)}," for i in range(nx))
+    w("*NSET, NSET=AXIS")
+    lines.extend(f"{node(0, j)}," for j in range(1, ny))
+    w("*NSET, NSET=TOP")
+    lines.extend(f"{node(i, ny - 1)}," for i in range(nx))
+    w("*MATERIAL, NAME=SPECIMEN")
+    w("*ELASTIC")
+    w(f"{material['E'] / stress_unit:.12e}, {material['nu']:.12g}")
+    if material["model"] == "j2":
+        w("*PLASTIC")
+        table = hardening_table(material, scene["largest_strain_intensity"])
+        lines.extend(f"{stress / stress_unit:.12e}, {strain:.12e}" for stress, strain in table)
+    w("*SOLID SECTION, ELSET=EBLOCK, MATERIAL=SPECIMEN")
+    if element == "CPE4":
+        w("1.0")
+    alphas = [alpha / unit for alpha in scene["alphas"]]
+    if contact == "given":
+        for k in range(1, len(alphas)):
+            w("*STEP")
+            w("*STATIC, DIRECT")
+            w("1.0, 1.0")
+            # Residual and correction tests 1e-7 of the average force instead of 0.005 (ccx
+            # manual, *CONTROLS): J2's equilibrium to the digits compared.
+            w("*CONTROLS, PARAMETERS=FIELD")
+            w("1e-7, 1e-7, 1e-5, 1e-2, 0.02, 1e-5, 1e-3, 1e-8")
+            w("*CONTROLS, PARAMETERS=TIME INCREMENTATION")
+            w("200, 200, 200, 200, 10, 200, 0, 200")
+            w("*BOUNDARY, OP=NEW")
+            w("BASE, 1, 2, 0.0")
+            w("AXIS, 1, 1, 0.0")
+            for i in scene["contact_sets"][k]:
+                w(f"{node(i, ny - 1)}, 2, 2, {-alphas[k] + gap(xs[i]):.12e}")
+            w("*NODE PRINT, NSET=TOP")
+            w("U, RF")
+            w("*END STEP")
+    elif contact == "replay":
+        for k in range(1, len(alphas)):
+            # Every node where indentsim put it: ccx updates the stresses along the same strain
+            # path and reports, as the reaction at each node, its own element forces there.
+            w("*STEP")
+            w("*STATIC, DIRECT")
+            w("1.0, 1.0")
+            w("*BOUNDARY, OP=NEW")
+            for n, (u1, u2) in enumerate(scene["displacements"][k] / unit):
+                w(f"{n + 1}, 1, 1, {u1:.12e}")
+                w(f"{n + 1}, 2, 2, {u2:.12e}")
+            w("*NODE PRINT, NSET=NALL")
+            w("RF")
+            w("*END STEP")
+    elif contact == "gap":
+        write_gap_contact(lines, xs, ys, alphas, scene, gap, rim, node)
+    else:
+        raise DeckError(f"contact = \"{contact}\": \"given\", \"replay\" or \"gap\"")
+    path.write_text("\n".join(lines) + "\n")
+    return 2 * (nx * ny - nx) - (ny - 1)  # free DOFs: base fixed, axis held in x
+
+
+def write_gap_contact(lines, xs, ys, alphas, scene, gap, rim, node):
+    """Gap elements to a rigid punch node driven through the run's depths (contact = "gap"); all
+    lengths in the deck's unit."""
+    w = lines.append
+    nx, ny = len(xs), len(ys)
+    punch_node = nx * ny + 1
+    h = float(np.min(np.diff(xs)))
+    reach = min(2.0 * max(scene["half_widths"]) / length_unit(scene) + 2.0 * h, rim)
+    candidates = [i for i in range(nx) if xs[i] <= reach]
+    if candidates[-1] == nx - 1:
+        raise DeckError("the contact reaches the specimen's side: no scene of MODEL.md")
+    w("*NODE, NSET=PUNCH")
+    w(f"{punch_node}, 0.0, {ys[-1] - ys[0]:.12e}, 0.0")
+    e = (nx - 1) * (ny - 1)
+    for i in candidates:
+        e += 1
+        w(f"*ELEMENT, TYPE=GAPUNI, ELSET=G{i}")
+        w(f"{e}, {node(i, ny - 1)}, {punch_node}")
+    if scene["case"]["material"]["model"] == "elastic":
+        # Unused, but it makes ccx iterate (see the pitfalls above).
+        w("*MATERIAL, NAME=NONLINEAR_TRIGGER")
+        w("*ELASTIC")
+        w("1.0, 0.0")
+        w("*PLASTIC")
+        w("1.0e30, 0.0")
+    stiffness = 1e9 * scene["case"]["material"]["E"] * length_unit(scene) ** 2 * h
+    if scene["kind"] == "axisymmetric":
+        stiffness *= xs[-1] * math.radians(2.0)  # the wedge's circumference at the outer radius
+    # The tension of an open gap: the force of a penetration 1e-21 of the deepest depth.
+    tension = stiffness * max(alphas) * 1e-21
+    for i in candidates:  # clearance, direction, (unused), stiffness, tension of an open gap
+        w(f"*GAP, ELSET=G{i}")
+        w(f"{gap(xs[i]):.12e}, 0., 1., 0., , {stiffness:.6e}, {tension:.6e}")
+    w("*BOUNDARY")
+    w("BASE, 1, 2, 0.0")
+    w("AXIS, 1, 1, 0.0")
+    w(f"{punch_node}, 1, 1, 0.0")
+    w(f"{punch_node}, 3, 3, 0.0")
+    w("*AMPLITUDE, NAME=DEPTH")
+    pairs = [f"{k:.1f}, {alpha:.12e}" for k, alpha in enumerate(alphas)]
+    lines.extend(", ".join(pairs[i:i + 4]) for i in range(0, len(pairs), 4))
+    w("*STEP, INC=100000")
+    w("*STATIC, DIRECT")
+    w(f"1.0, {len(alphas) - 1:.1f}")
+    w("*BOUNDARY, AMPLITUDE=DEPTH")
+    w(f"{punch_node}, 2, 2, -1.0")
+    w("*NODE PRINT, NSET=PUNCH, TOTALS=ONLY")
+    w("RF")
+    w("*END STEP")
+
+
+# ---------------------------------------------------------------------------------------------
+# Running ccx and reading its answer
+
+
+def run_ccx(ccx, workdir, job, unit):
+    """Runs ccx on one thread; returns the surface's displacements and reaction forces at every
+    increment ({"U": [array (nx, 2)], "RF": [...]}, index 0 the first increment; with gap elements
+    also the punch node's vertical reaction, "punch") and the wall time."""
+    env = dict(os.environ, OMP_NUM_THREADS="1", CCX_NPROC_STIFFNESS="1", CCX_NPROC_EQUATION_SOLVER="1",
+               CCX_NPROC_RESULTS="1")
+    start = time.perf_counter()
+    proc = subprocess.run([ccx, "-i", job], cwd=workdir, env=env, capture_output=True, text=True)
+    wall = time.perf_counter() - start
+    (workdir / f"{job}.log").write_text(proc.stdout + proc.stderr)
+    if proc.returncode != 0 or "*ERROR" in proc.stdout:
+        tail = "\n".join(line for line in proc.stdout.splitlines()[-30:] if line.strip())
+        raise DeckError(f"ccx failed (rc {proc.returncode}); deck and log in {workdir}\n{tail}")
+    text = (workdir / f"{job}.dat").read_text()
+    result = {}
+    for key, title, node_set in (("U", "displacements", "TOP"), ("RF", "forces", "TOP"), ("RF_all", "forces", "NALL")):
+        blocks = re.findall(rf" {title} \(\w+,\w+,\w+\) for set {node_set} and time\s+(\S+)\s*\n\s*\n"
+                            r"((?:\s+\d+(?:\s+\S+){3}\n)+)", text)
+        scale = unit if key == "U" else 1.0  # displacements back to metres
+        result[key] = [scale * np.array([[float(v) for v in line.split()[1:3]] for line in block.strip().splitlines()])
+                       for t, block in blocks if abs(float(t) - round(float(t))) < 1e-9]
+    totals = re.findall(r"total force \(fx,fy,fz\) for set PUNCH and time\s+(\S+)\s*\n\s*\n?\s*(\S+)\s+(\S+)", text)
+    result["punch"] = [float(fy) for t, _, fy in totals if abs(float(t) - round(float(t))) < 1e-9]
+    return result, wall
+
+
+def forces_of(scene, result, contact):
+    """P at every increment from 1 on: the punch node's reaction with gap elements, the sum of the
+    surface's vertical reactions with the given contact set."""
+    scale = force_scale(scene)
+    if contact == "gap":
+        return [scale * f for f in result["punch"]]
+    if contact == "replay":
+        top = (len(scene["ys"]) - 1) * len(scene["xs"])
+        return [scale * float(np.sum(rf[top:, 1])) for rf in result["RF_all"]]
+    return [scale * float(np.sum(rf[:, 1])) for rf in result["RF"]]
+
+
+def replay_residual(scene, k, rf_all):
+    """ccx's element forces at the unknowns indentsim solved for in its replayed increment k, and
+    the largest contact reaction there: the first is 0 where indentsim's displacements are in
+    equilibrium by ccx's elements and J2 update.  The unknowns: every displacement but the base's,
+    the axis nodes' x and the contact nodes' y (those carry reactions); a contact node's x is an
+    unknown (frictionless: no tangential reaction).  In axisymmetry only the vertical forces count:
+    the radial force ccx prints at a node of its expanded wedge is not its radial residual (at the
+    free surface nodes of ccx's own converged solution it is 1% of the largest contact reaction,
+    where the vertical one is 1e-15)."""
+    nx, ny = len(scene["xs"]), len(scene["ys"])
+    free = np.ones((nx * ny, 2), dtype=bool)
+    free[:nx, :] = False                 # the base
+    free[::nx, 0] = False                # the axis, x
+    if scene["kind"] == "axisymmetric":
+        free[:, 0] = False
+    contact = [(ny - 1) * nx + i for i in scene["contact_sets"][k]]
+    free[contact, 1] = False
+    largest_reaction = float(np.max(np.abs(rf_all[contact, 1]))) if contact else 0.0
+    return float(np.max(np.abs(rf_all[free]))), largest_reaction
+
+
+def check_signorini(scene, k, u, rf):
+    """The Signorini conditions (MODEL.md) in ccx's solution of increment k with the given contact
+    set: the largest pull of a prescribed node relative to the largest push, and the largest
+    penetration of a free node relative to the depth (both 0 where they hold)."""
+    gap, rim = punch_gap(scene["case"]["punch"])
+    alpha, contact = scene["alphas"][k], set(scene["contact_sets"][k])
+    pushes = [-rf[i, 1] for i in contact]
+    pull = max([0.0] + [-p for p in pushes]) / max([1e-300] + pushes)
+    penetration = max([0.0] + [u[i, 1] - (-alpha + gap(x)) for i, x in enumerate(scene["xs"])
+                                  if i not in contact and x < rim])
+    return pull, penetration / alpha if alpha > 0 else 0.0
