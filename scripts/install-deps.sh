@@ -15,6 +15,7 @@ packages=(
   python3-dev pybind11-dev python3-numpy  # the Python module (build/python/indentsim)
   python3-dask python3-distributed python3-tqdm  # sweeps on Dask distributed, with a progress bar
   clang libclang-rt-14-dev   # libFuzzer targets (scripts/fuzz.sh)
+  calculix-ccx               # CalculiX, the independent solver of tests CalculiX.* (benchmarks/calculix)
   libomp-14-dev              # OpenMP for clang: Debian's SUNDIALS CMake package requires OpenMP of the configuring compiler
 )
 
