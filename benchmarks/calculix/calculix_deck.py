@@ -1,38 +1,43 @@
 """CalculiX 2.20 decks of indentsim's scenes, node for node on indentsim's own mesh.
 
 The deck is built from an indentsim run folder: its `case.toml` (every key explicit), the depths of
-its `curve.csv`, the grid of its `fields/step_000000.vtu` and, for the contact set, the nodes'
-`contact_status` in the fields of every increment.  Both codes then solve the same discrete
-problem, so their forces must agree to the solvers' tolerances on any mesh; what differs is only
-the implementation (elements, constitutive update, equilibrium iterations).
+its `curve.csv`, the grid of its `fields/step_000000.vtu` and, for the contact, the nodes'
+`contact_status` and displacements in the fields of every increment.  Both codes then have the
+same discrete problem, so their forces must agree to the solvers' tolerances on any mesh; what
+differs is only the implementation (elements, constitutive update, equilibrium iterations) and
+what expected_difference bounds.
 
-  * elements: CPE4 (plane strain, thickness 1 m) or CAX4 (axisymmetric: x = r, y = z), bilinear
-    with full 2x2 integration -- indentsim's Q1 (run it with mesh.element = "q1");
+  * elements: CPE4 (plane strain, one length unit thick) or CAX4 (axisymmetric: x = r, y = z),
+    bilinear with full 2x2 integration -- indentsim's Q1 (run it with mesh.element = "q1");
   * the base fixed, the axis x = 0 held in x, the far side free (MODEL.md);
   * material: elastic, or J2 flow theory with isotropic hardening (*PLASTIC).  indentsim's J2 law
     takes its hardening curve from the Ilyushin law of the same parameters: on a proportional path
     the equivalent plastic strain is eps_p = e_u omega(e_u) and the yield stress
     sigma_u = 3 mu (1 - omega(e_u)) e_u (include/indentsim/material.hpp).  The linear law is two
-    points of ccx's table (exact); the power law is tabulated densely (ccx interpolates linearly:
-    the table's own error is below 1e-5 of the stress).  Ilyushin's deformation theory has no
-    counterpart in ccx;
+    points of ccx's table (exact); the power law is tabulated (hardening_table).  Ilyushin's
+    deformation theory has no counterpart in ccx;
   * the punch profile g(x) of MODEL.md is written out here again (sphere, cone with or without a
     spherical tip, flat), independently of src/geometry/punch.cpp.
-Two ways to impose the contact:
-  * contact = "given" (any scene): one ccx *STEP per indentsim increment (*STATIC, DIRECT: one
-    increment, so J2's backward-Euler update sees the same strain increments in both codes), the
-    surface nodes indentsim found in contact prescribed to the punch, u_y = -alpha_k + g(x)
-    (*BOUNDARY, OP=NEW), the others free.  ccx then solves the elasto-plastic equilibrium alone,
-    and its own solution is checked against the Signorini conditions (check_signorini): every
-    prescribed node pushed on, never pulled, and no free node through the punch.  Together with
-    equal forces this says indentsim's contact set and state solve the discrete problem;
-  * contact = "gap" (monotone elastic scenes): ccx finds the contact itself, one GAPUNI element
-    from each surface node within reach to one rigid punch node, direction (0, 1, 0), clearance
-    g(x): exactly the vertical-gap condition.  On plastic scenes ccx's Newton iterations do not
-    converge with gap elements stiff enough to leave P unchanged (tried: fixed and automatic
-    increments, gap stiffness 1e4 to 1e9 E h): hence the given contact set there.
+Three ways to impose the contact (`contact`):
+  * "replay" (every scene): one ccx *STEP per indentsim increment (*STATIC, DIRECT: one increment,
+    so J2's backward-Euler update sees the same strain increments in both codes), every node's
+    displacement prescribed to indentsim's.  ccx updates its stresses along that strain path and
+    prints its element forces: they must vanish at indentsim's unknowns (replay_residual), they
+    are the reactions at the contact nodes, and with indentsim's surface they must satisfy the
+    Signorini conditions (check_signorini);
+  * "given" (elastic scenes): the same steps, with only the nodes indentsim found in contact
+    prescribed to the punch, u_y = -alpha_k + g(x) (*BOUNDARY, OP=NEW), and ccx solving for the
+    rest.  On plastic scenes ccx's Newton iterations stall or cycle between two states;
+  * "gap" (elastic scenes): ccx finds the contact itself, one GAPUNI element from each surface
+    node within reach to one rigid punch node driven through the run's depths, direction
+    (0, 1, 0), clearance g(x): exactly the vertical-gap condition.  On plastic scenes ccx did not
+    converge with gap elements (fixed increments with gap stiffnesses 1e4 to 1e9 E h, automatic
+    increments at 1e9 E h).
 CalculiX pitfalls met on the way:
   * numbers on data lines are read in 20-character fields: 13 significant digits fit;
+  * elements whose Jacobian determinant is below an absolute threshold are refused ("nonpositive
+    jacobian"): a Berkovich cone's 0.3 mm specimen, expanded into a 2-degree wedge, is, in metres.
+    The deck's unit of length is the specimen's height (length_unit);
   * GAPUNI elements alone do not make a *STATIC step nonlinear: ccx solves once, linearly, and
     the contact is wrong.  A *PLASTIC material that no element uses switches on its Newton
     iterations (small strains, no NLGEOM);
@@ -42,10 +47,13 @@ CalculiX pitfalls met on the way:
   * the gap stiffness is a penalty: 1e4 E h (h the finest element) left the paper's P 7% low, and
     1e9 E h leaves it unchanged to the printed digits;
   * an axisymmetric model is expanded into a 2-degree wedge of straight-sided hexahedra: its
-    forces are those of the wedge, so the whole ring's force is 180 times the printed one, and the
-    wedge's geometry differs from the exact ring's by O(1 degree^2): on elastic scenes ccx's P is
-    2.5-2.8e-5 below indentsim's at every increment, a constant offset, independent of the gap
-    stiffness and of the contact mode;
+    forces are those of the wedge, so the whole ring's force is 180 times the printed one; the
+    wedge's geometry differs from the exact ring's by O(1 degree^2) (with "given" and "gap", ccx's
+    P on the elastic scenes is 2.5-2.8e-5 below indentsim's at every increment, whatever the gap
+    stiffness); and the radial force it prints at a node is not that node's radial residual;
+  * ccx's stress update went wrong with power-law tables of 200 points or more: P moved 3.8e-3 away
+    from the limit that tables of 40, 60, 100 and 120 points converge to (as the square of their
+    log step), and ccx ran nine times slower.  Tables of 100 points;
   * ccx's default convergence test is on the residual relative to the average force
     (R_alpha^n = 0.005): tightened here (*CONTROLS) for the given contact set;
   * the .dat file prints 7 significant digits, so ccx's P is known to about 2.5e-7.
