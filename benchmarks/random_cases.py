@@ -2,7 +2,7 @@
 """Random load cases: robustness and Newton effort of one or more builds (prints; not a test).
 
     /usr/bin/python3 benchmarks/random_cases.py [--seeds 1,2,3] [--cases 40] [--binary BIN ...]
-        [--keep DIR]
+        [--keep DIR] [--write-only DIR]
 
 Draws load cases across everything the code models -- plane strain and axisymmetry; sphere
 (cylinder), cone (wedge), blunted cone and flat punch; elastic, Ilyushin and J2 with linear and
@@ -74,6 +74,15 @@ def draw_case(rng):
             f'[mesh]\ncontact_nodes = {contact_nodes}\nerror_estimate = "off"\n\n[output]\ndir = "out"\n')
 
 
+def draw_cases(seeds, per_seed):
+    """(name, TOML text) of every case the seeds ("1,2,3") draw, per_seed each (0: 30 for seed 1,
+    else 40)."""
+    for seed in (int(s) for s in seeds.split(",")):
+        rng = random.Random(seed)
+        for k in range(per_seed or (30 if seed == 1 else 40)):
+            yield f"case_{seed}_{k:02d}", draw_case(rng)
+
+
 def run(binary, case, out):
     """(Newton iterations, factorizations, wall seconds) of one run, or the error's last line."""
     start = time.monotonic()
@@ -96,18 +105,25 @@ def main():
     parser.add_argument("--cases", type=int, default=0, help="cases per seed (default: 30 for seed 1, else 40)")
     parser.add_argument("--binary", action="append", help="an indentsim CLI (repeat to compare builds)")
     parser.add_argument("--keep", help="write the cases and runs here instead of a temporary folder")
+    parser.add_argument("--write-only", metavar="DIR",
+                        help="only write the cases to DIR, Ilyushin's as J2 (for benchmarks/calculix/same_mesh.py, "
+                             "which has no Ilyushin law in CalculiX), and run nothing")
     args = parser.parse_args()
+    if args.write_only:
+        folder = pathlib.Path(args.write_only)
+        folder.mkdir(parents=True, exist_ok=True)
+        for name, text in draw_cases(args.seeds, args.cases):
+            (folder / f"{name}.toml").write_text(text.replace('model = "ilyushin"', 'model = "j2"'))
+        return 0
     binaries = args.binary or [str(ROOT / "build" / "indentsim")]
     with tempfile.TemporaryDirectory() as tmp:
         folder = pathlib.Path(args.keep or tmp)
         folder.mkdir(parents=True, exist_ok=True)
         cases = []
-        for seed in (int(s) for s in args.seeds.split(",")):
-            rng = random.Random(seed)
-            for k in range(args.cases or (30 if seed == 1 else 40)):
-                case = folder / f"case_{seed}_{k:02d}.toml"
-                case.write_text(draw_case(rng))
-                cases.append(case)
+        for name, text in draw_cases(args.seeds, args.cases):
+            case = folder / f"{name}.toml"
+            case.write_text(text)
+            cases.append(case)
         results = {b: {} for b in binaries}
         for case in cases:  # builds in turns, so that both see the same machine
             for j, b in enumerate(binaries):
