@@ -21,9 +21,9 @@ Both codes solve one discrete problem, so their P must agree at every increment 
 tolerances and ccx's 7 printed digits, plus what the deck itself changes (ccx's axisymmetric wedge,
 a tabulated power law: calculix_deck.expected_difference).  Prints, per case, the largest
 difference of P over the path relative to the peak P, the difference at the peak and at the end,
-the residual, the Signorini conditions in ccx's forces and both wall times (ccx's replays no
-equilibrium iterations: its time is no speed comparison; compare_calculix.py is); with --verbose
-every increment.  Exit status 1 if a case was not compared, differs by more than allowed or breaks
+the residual, the Signorini conditions in ccx's forces and both wall times (a replay has no
+equilibrium iterations in ccx, so its time is no speed comparison; compare_calculix.py makes one);
+with --verbose every increment.  Exit status 1 if a case was not compared, differs by more than allowed or breaks
 the Signorini conditions.
 """
 
