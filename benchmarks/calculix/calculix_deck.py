@@ -124,10 +124,10 @@ def read_run(run_dir):
     contact_sets, displacements = [], []
     for k in range(len(rows)):
         vtu = run_dir / "fields" / f"step_{k:06d}.vtu"
-        if not vtu.exists():
+        if k > 0 and not vtu.exists():
             contact_sets = displacements = None
             break
-        arrays = point_arrays(vtu)
+        arrays = first if k == 0 else point_arrays(vtu)
         # contact_status: 1 in contact, 0 an open candidate, -1 no candidate.
         contact_sets.append([i for i in range(len(xs)) if arrays["contact_status"][top[i]] == 1])
         displacements.append(arrays["displacement"][order, :2])
@@ -233,7 +233,7 @@ def force_scale(scene):
 # The deck
 
 
-def write_deck(path, scene, contact="given"):
+def write_deck(path, scene, contact="replay"):
     """The deck; returns the number of free displacement unknowns of the 2-D model.  Lengths in
     units of length_unit(scene), forces in newtons (stresses in N per unit length squared)."""
     unit = length_unit(scene)

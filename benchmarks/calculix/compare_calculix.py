@@ -14,9 +14,10 @@ axisymmetry, sphere, cone or flat punch), and each contact_nodes N:
   2. the CalculiX deck is built from the load case and that grid -- node for node the same mesh,
      so both codes have the same discretization error and "equal error" means "equal mesh";
   3. ccx solves it (one thread, like indentsim) and its force is read from the .dat file.
-Prints P of both (N/m, both halves), their relative difference, the wall times and their ratio,
-and the error of P against the Richardson extrapolation of indentsim alone on the two finest meshes
-and one twice as fine (--reference-nodes, default twice the largest N), with their observed order.
+Prints P of both (N/m of both halves in plane strain, N in axisymmetry), their relative difference,
+the wall times and their ratio, and the error of P against the Richardson extrapolation of
+indentsim alone on the two finest meshes and one twice as fine (--reference-nodes, default twice
+the largest N), with their observed order.
 
 The deck: calculix_deck.py (CPE4, one GAPUNI element per surface node within reach to one rigid
 punch node with the vertical gap g(x) as clearance -- contact = "gap", ccx finds the contact
@@ -46,12 +47,15 @@ def fail(message):
     sys.exit(f"compare_calculix: {message}")
 
 
-def check_path(path):
-    """The comparison is of the final P along a monotone path (its Richardson reference)."""
+def check_case(path):
+    """The comparison is of the final P along a monotone path (its Richardson reference); returns
+    the unit of P in the case's scene."""
     with open(path, "rb") as f:
-        waypoints = tomllib.load(f).get("load", {}).get("path", [])
+        case = tomllib.load(f)
+    waypoints = case.get("load", {}).get("path", [])
     if len(waypoints) != 2 or waypoints[0] != 0.0:
         fail(f"{path}: load.path: only a monotone path [0, alpha] is compared here")
+    return "N" if case.get("geometry", {}).get("kind") == "axisymmetric" else "N/m"
 
 
 def run_indentsim(exe, case, nodes, increments, out, extra=()):
@@ -87,7 +91,7 @@ def ccx_force(ccx, grid_run, deck_dir):
     return forces[-1], wall, dofs
 
 
-def plot(rows, reference, path):
+def plot(rows, reference, path, title):
     import matplotlib
 
     matplotlib.use("Agg")
@@ -103,7 +107,7 @@ def plot(rows, reference, path):
         ax.annotate(f"N = {r['nodes']}", (r["ccx"], e), textcoords="offset points", xytext=(4, 4), fontsize=8)
     ax.set_xlabel("wall time of the whole run [s] (one thread each)")
     ax.set_ylabel("error of the final P [%]")
-    ax.set_title("Elastic paper geometry, 24 increments:\nthe same meshes, the same P", fontsize=10)
+    ax.set_title(f"{title}:\nthe same meshes, the same P", fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(loc="lower left", fontsize=8)
     fig.tight_layout()
@@ -127,7 +131,7 @@ def main():
     args = ap.parse_args()
     if shutil.which(args.ccx) is None:
         fail(f"{args.ccx} not found: apt-get install calculix-ccx")
-    check_path(args.case)
+    unit = check_case(args.case)
     work = args.keep or pathlib.Path(tempfile.mkdtemp(prefix="compare_calculix_"))
     work.mkdir(parents=True, exist_ok=True)
 
@@ -159,11 +163,11 @@ def main():
         if (f1 - f2) * (f2 - f3) > 0 and abs(n3 / n2 - ratio) < 1e-9:
             order = math.log(abs(f1 - f2) / abs(f2 - f3)) / math.log(ratio)
             reference = f3 + (f3 - f2) / (ratio ** order - 1.0)
-            print(f"reference P = {reference:.8e} N/m (Richardson of indentsim at N = {n1}, {n2}, {n3}; "
+            print(f"reference P = {reference:.8e} {unit} (Richardson of indentsim at N = {n1}, {n2}, {n3}; "
                   f"observed order {order:.2f})")
         else:
             print(f"no reference: P at N = {n1}, {n2}, {n3} is not monotone or the meshes are not one ratio apart")
-    print(f"{'N':>4} {'DOFs':>7} {'P indentsim [N/m]':>18} {'P ccx [N/m]':>15} {'rel.diff':>9} {'error':>8} "
+    print(f"{'N':>4} {'DOFs':>7} {f'P indentsim [{unit}]':>18} {f'P ccx [{unit}]':>15} {'rel.diff':>9} {'error':>8} "
           f"{'indentsim [s]':>13} {'+estimate [s]':>13} {'ccx [s]':>8} {'ratio':>6} {'ratio+est':>9}")
     for r in rows:
         error = f"{abs(r['force'] - reference) / reference * 100:.3f}%" if reference else "-"
@@ -171,7 +175,7 @@ def main():
               f"{abs(r['ccx_force'] - r['force']) / r['force']:>9.1e} {error:>8} {r['off']:>13.3f} {r['on']:>13.3f} "
               f"{r['ccx']:>8.2f} {r['ccx'] / r['off']:>6.1f} {r['ccx'] / r['on']:>9.1f}")
     if args.plot and reference:
-        plot(rows, reference, args.plot)
+        plot(rows, reference, args.plot, f"{args.case.stem}, elastic, {args.increments} increments")
     (work / "compare_calculix.json").write_text(json.dumps(dict(case=str(args.case), rows=rows, reference=reference),
                                                            indent=1))
     if not args.keep:
