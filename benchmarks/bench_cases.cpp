@@ -22,7 +22,7 @@
 
 #include <fmt/format.h>
 
-#include "indentsim/simulation.hpp"
+#include "indentsim/simulation/simulation.hpp"
 #include "bench_support.hpp"
 
 using namespace indentsim;

@@ -18,8 +18,8 @@
 
 #include <fmt/format.h>
 
-#include "indentsim/error_estimate.hpp"
-#include "indentsim/simulation.hpp"
+#include "indentsim/simulation/error_estimate.hpp"
+#include "indentsim/simulation/simulation.hpp"
 #include "bench_support.hpp"
 
 using namespace indentsim;

@@ -22,8 +22,8 @@
 
 #include <fmt/format.h>
 
-#include "indentsim/fit.hpp"
-#include "indentsim/load_case.hpp"
+#include "indentsim/fitting/fit.hpp"
+#include "indentsim/input/load_case.hpp"
 #include "bench_support.hpp"
 
 using namespace indentsim;

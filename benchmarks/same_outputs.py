@@ -6,7 +6,7 @@
                                      (B's build); exit 1 on any difference
 
 What must be identical (issue 36): curve.csv in every column but the wall time; summary.json in
-every number but its timings (and the build's commit string); case.toml but for output.dir;
+every number but its timings (and the build's commit string); case.toml but for output.dir and the build's line;
 layers.csv, profiles.csv, the VTU fields and fields.pvd byte for byte.  Checkpoints record the
 run folder's path and each row's wall time, so they are checked by what they do: `compare` resumes
 the middle checkpoint of every case of A with B's CLI and asks for A's curve and summary again).
@@ -116,8 +116,8 @@ def compare(a, b, cli):
             ja, jb = (without_timings(json.loads(p.read_text())) for p in (pa, pb))
             why = None if ja == jb else "numbers differ"
         elif rel.name == "case.toml":
-            la = [l for l in pa.read_text().splitlines() if not l.startswith("dir = ")]
-            lb = [l for l in pb.read_text().splitlines() if not l.startswith("dir = ")]
+            la, lb = ([l for l in p.read_text().splitlines() if not l.startswith(("dir = ", "# Written by"))]
+                      for p in (pa, pb))
             why = None if la == lb else "differs"
         else:
             why = None if pa.read_bytes() == pb.read_bytes() else "bytes differ"

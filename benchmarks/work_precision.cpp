@@ -18,8 +18,8 @@
 
 #include <fmt/format.h>
 
-#include "indentsim/hertz.hpp"
-#include "indentsim/simulation.hpp"
+#include "indentsim/geometry/hertz.hpp"
+#include "indentsim/simulation/simulation.hpp"
 
 using namespace indentsim;
 

@@ -2,10 +2,10 @@
 
 #include <string>
 
-#include "indentsim/checkpoint.hpp"
-#include "indentsim/error.hpp"
-#include "indentsim/load_case.hpp"
-#include "indentsim/mesh.hpp"
+#include "indentsim/output/checkpoint.hpp"
+#include "indentsim/base/error.hpp"
+#include "indentsim/input/load_case.hpp"
+#include "indentsim/geometry/mesh.hpp"
 
 namespace indentsim::fuzz {
 

@@ -11,10 +11,10 @@
 
 #include <gtest/gtest.h>
 
-#include "indentsim/kinematics.hpp"
-#include "indentsim/layer_forces.hpp"
-#include "indentsim/mesh.hpp"
-#include "indentsim/simulation.hpp"
+#include "indentsim/geometry/kinematics.hpp"
+#include "indentsim/solvers/layer_forces.hpp"
+#include "indentsim/geometry/mesh.hpp"
+#include "indentsim/simulation/simulation.hpp"
 #include "test_support.hpp"
 
 namespace fs = std::filesystem;

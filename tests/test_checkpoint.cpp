@@ -11,9 +11,9 @@
 
 #include <gtest/gtest.h>
 
-#include "indentsim/checkpoint.hpp"
-#include "indentsim/error.hpp"
-#include "indentsim/io.hpp"
+#include "indentsim/output/checkpoint.hpp"
+#include "indentsim/base/error.hpp"
+#include "indentsim/output/run_output.hpp"
 #include "test_support.hpp"
 
 namespace fs = std::filesystem;

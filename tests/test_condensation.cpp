@@ -8,9 +8,9 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
-#include "indentsim/condensation.hpp"
-#include "indentsim/simulation.hpp"
-#include "indentsim/solver.hpp"
+#include "indentsim/solvers/condensation.hpp"
+#include "indentsim/simulation/simulation.hpp"
+#include "indentsim/solvers/solver.hpp"
 #include "test_support.hpp"
 
 using namespace indentsim;

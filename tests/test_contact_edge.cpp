@@ -1,4 +1,4 @@
-// The contact edge resolved inside an element (contact_half_width, include/indentsim/contact.hpp):
+// The contact edge resolved inside an element (contact_half_width, include/indentsim/solvers/contact.hpp):
 // against Hertz's and Sneddon's edges under refinement, never a node's position, and converging
 // with an observed order on two plastic cases, whose edge has no closed form.
 #include <algorithm>
@@ -11,7 +11,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
-#include "indentsim/simulation.hpp"
+#include "indentsim/simulation/simulation.hpp"
 #include "test_support.hpp"
 
 using namespace indentsim;

@@ -11,8 +11,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "indentsim/curve_analysis.hpp"
-#include "indentsim/error.hpp"
+#include "indentsim/analysis/curve_analysis.hpp"
+#include "indentsim/base/error.hpp"
 #include "test_support.hpp"
 
 using namespace indentsim;

@@ -6,8 +6,8 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
-#include "indentsim/hertz.hpp"
-#include "indentsim/simulation.hpp"
+#include "indentsim/geometry/hertz.hpp"
+#include "indentsim/simulation/simulation.hpp"
 #include "test_support.hpp"
 
 using namespace indentsim;

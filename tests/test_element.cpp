@@ -3,9 +3,9 @@
 
 #include <gtest/gtest.h>
 
-#include "indentsim/element.hpp"
-#include "indentsim/kinematics.hpp"
-#include "indentsim/material.hpp"
+#include "indentsim/geometry/element.hpp"
+#include "indentsim/geometry/kinematics.hpp"
+#include "indentsim/materials/material.hpp"
 
 using namespace indentsim;
 

@@ -11,9 +11,9 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
-#include "indentsim/error_estimate.hpp"
-#include "indentsim/io.hpp"
-#include "indentsim/simulation.hpp"
+#include "indentsim/simulation/error_estimate.hpp"
+#include "indentsim/output/run_output.hpp"
+#include "indentsim/simulation/simulation.hpp"
 #include "test_support.hpp"
 
 using namespace indentsim;

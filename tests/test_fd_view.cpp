@@ -7,9 +7,9 @@
 
 #include <gtest/gtest.h>
 
-#include "indentsim/fields.hpp"
-#include "indentsim/hertz.hpp"
-#include "indentsim/simulation.hpp"
+#include "indentsim/output/fields.hpp"
+#include "indentsim/geometry/hertz.hpp"
+#include "indentsim/simulation/simulation.hpp"
 #include "test_support.hpp"
 
 using namespace indentsim;

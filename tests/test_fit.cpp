@@ -9,9 +9,9 @@
 
 #include <gtest/gtest.h>
 
-#include "indentsim/error.hpp"
-#include "indentsim/fit.hpp"
-#include "indentsim/load_case.hpp"
+#include "indentsim/base/error.hpp"
+#include "indentsim/fitting/fit.hpp"
+#include "indentsim/input/load_case.hpp"
 #include "test_support.hpp"
 
 namespace indentsim {

@@ -11,9 +11,9 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
-#include "indentsim/checkpoint.hpp"
-#include "indentsim/error.hpp"
-#include "indentsim/simulation.hpp"
+#include "indentsim/output/checkpoint.hpp"
+#include "indentsim/base/error.hpp"
+#include "indentsim/simulation/simulation.hpp"
 #include "test_support.hpp"
 
 namespace fs = std::filesystem;

@@ -1,4 +1,4 @@
-// Oliver-Pharr analysis (include/indentsim/indentation_analysis.hpp): the unloading fit on
+// Oliver-Pharr analysis (include/indentsim/analysis/indentation_analysis.hpp): the unloading fit on
 // synthetic power laws, a branch too short to fit, the elastic sphere against Hertz (E_r = E*,
 // h_c = h_max / 2), and the pile-up ratio of elasto-plastic spheres against the literature's
 // trend (pile-up for little hardening, sink-in for strong hardening).
@@ -9,10 +9,10 @@
 
 #include <gtest/gtest.h>
 
-#include "indentsim/indentation_analysis.hpp"
-#include "indentsim/io.hpp"
-#include "indentsim/punch.hpp"
-#include "indentsim/simulation.hpp"
+#include "indentsim/analysis/indentation_analysis.hpp"
+#include "indentsim/output/run_output.hpp"
+#include "indentsim/geometry/punch.hpp"
+#include "indentsim/simulation/simulation.hpp"
 #include "test_support.hpp"
 
 using namespace indentsim;

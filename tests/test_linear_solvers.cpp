@@ -11,8 +11,8 @@
 
 #include <gtest/gtest.h>
 
-#include "indentsim/simulation.hpp"
-#include "indentsim/worker_threads.hpp"
+#include "indentsim/simulation/simulation.hpp"
+#include "indentsim/base/worker_threads.hpp"
 #include "test_support.hpp"
 
 using namespace indentsim;

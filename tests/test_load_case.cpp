@@ -3,9 +3,9 @@
 
 #include <gtest/gtest.h>
 
-#include "indentsim/error.hpp"
-#include "indentsim/load_case.hpp"
-#include "indentsim/mesh.hpp"
+#include "indentsim/base/error.hpp"
+#include "indentsim/input/load_case.hpp"
+#include "indentsim/geometry/mesh.hpp"
 #include "test_support.hpp"
 
 using namespace indentsim;

@@ -6,9 +6,9 @@
 
 #include <gtest/gtest.h>
 
-#include "indentsim/error.hpp"
-#include "indentsim/io.hpp"
-#include "indentsim/simulation.hpp"
+#include "indentsim/base/error.hpp"
+#include "indentsim/output/run_output.hpp"
+#include "indentsim/simulation/simulation.hpp"
 #include "test_support.hpp"
 
 using namespace indentsim;

@@ -5,7 +5,7 @@
 
 #include <gtest/gtest.h>
 
-#include "indentsim/material.hpp"
+#include "indentsim/materials/material.hpp"
 
 using namespace indentsim;
 

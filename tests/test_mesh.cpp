@@ -5,7 +5,7 @@
 
 #include <gtest/gtest.h>
 
-#include "indentsim/mesh.hpp"
+#include "indentsim/geometry/mesh.hpp"
 #include "test_support.hpp"
 
 using namespace indentsim;

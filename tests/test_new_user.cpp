@@ -9,8 +9,8 @@
 
 #include <gtest/gtest.h>
 
-#include "indentsim/error.hpp"
-#include "indentsim/load_case.hpp"
+#include "indentsim/base/error.hpp"
+#include "indentsim/input/load_case.hpp"
 #include "test_support.hpp"
 
 namespace fs = std::filesystem;

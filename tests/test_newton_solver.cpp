@@ -8,9 +8,9 @@
 
 #include <gtest/gtest.h>
 
-#include "indentsim/assembly.hpp"
-#include "indentsim/mesh.hpp"
-#include "indentsim/solver.hpp"
+#include "indentsim/solvers/assembly.hpp"
+#include "indentsim/geometry/mesh.hpp"
+#include "indentsim/solvers/solver.hpp"
 #include "test_support.hpp"
 
 using namespace indentsim;

@@ -4,10 +4,10 @@
 
 #include <gtest/gtest.h>
 
-#include "indentsim/assembly.hpp"
-#include "indentsim/mesh.hpp"
+#include "indentsim/solvers/assembly.hpp"
+#include "indentsim/geometry/mesh.hpp"
 #include "test_support.hpp"
-#include "indentsim/solver.hpp"
+#include "indentsim/solvers/solver.hpp"
 
 using namespace indentsim;
 

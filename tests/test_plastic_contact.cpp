@@ -6,7 +6,7 @@
 
 #include <gtest/gtest.h>
 
-#include "indentsim/simulation.hpp"
+#include "indentsim/simulation/simulation.hpp"
 #include "test_support.hpp"
 
 using namespace indentsim;

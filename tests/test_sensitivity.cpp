@@ -10,10 +10,10 @@
 
 #include <gtest/gtest.h>
 
-#include "indentsim/load_case.hpp"
-#include "indentsim/load_stepping.hpp"
-#include "indentsim/material_parameter.hpp"
-#include "indentsim/simulation.hpp"
+#include "indentsim/input/load_case.hpp"
+#include "indentsim/simulation/load_stepping.hpp"
+#include "indentsim/materials/material_parameter.hpp"
+#include "indentsim/simulation/simulation.hpp"
 #include "test_support.hpp"
 
 namespace indentsim {

@@ -14,8 +14,8 @@
 
 #include <gtest/gtest.h>
 
-#include "indentsim/load_case.hpp"
-#include "indentsim/mesh.hpp"
+#include "indentsim/input/load_case.hpp"
+#include "indentsim/geometry/mesh.hpp"
 
 namespace indentsim::testing {
 

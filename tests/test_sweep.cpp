@@ -13,9 +13,9 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
-#include "indentsim/error.hpp"
-#include "indentsim/sweep.hpp"
-#include "indentsim/sweep_results.hpp"
+#include "indentsim/base/error.hpp"
+#include "indentsim/study/sweep.hpp"
+#include "indentsim/study/sweep_results.hpp"
 #include "test_support.hpp"
 
 namespace fs = std::filesystem;

@@ -13,7 +13,7 @@ what expected_difference bounds.
   * material: elastic, or J2 flow theory with isotropic hardening (*PLASTIC).  indentsim's J2 law
     takes its hardening curve from the Ilyushin law of the same parameters: on a proportional path
     the equivalent plastic strain is eps_p = e_u omega(e_u) and the yield stress
-    sigma_u = 3 mu (1 - omega(e_u)) e_u (include/indentsim/material.hpp).  The linear law is two
+    sigma_u = 3 mu (1 - omega(e_u)) e_u (include/indentsim/materials/material.hpp).  The linear law is two
     points of ccx's table (exact); the power law is tabulated (hardening_table).  Ilyushin's
     deformation theory has no counterpart in ccx;
   * the punch profile g(x) of MODEL.md is written out here again (sphere, cone with or without a

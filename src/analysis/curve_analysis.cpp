@@ -1,4 +1,4 @@
-#include "indentsim/curve_analysis.hpp"
+#include "indentsim/analysis/curve_analysis.hpp"
 
 #include <fstream>
 #include <map>
@@ -7,10 +7,10 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "indentsim/curve_csv.hpp"
-#include "indentsim/error.hpp"
-#include "indentsim/punch.hpp"
-#include "indentsim/version.hpp"
+#include "indentsim/input/curve_csv.hpp"
+#include "indentsim/base/error.hpp"
+#include "indentsim/geometry/punch.hpp"
+#include "indentsim/base/version.hpp"
 
 namespace fs = std::filesystem;
 

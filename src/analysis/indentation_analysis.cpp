@@ -1,4 +1,4 @@
-#include "indentsim/indentation_analysis.hpp"
+#include "indentsim/analysis/indentation_analysis.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -10,7 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <unsupported/Eigen/NonLinearOptimization>
 
-#include "indentsim/punch.hpp"
+#include "indentsim/geometry/punch.hpp"
 
 namespace indentsim {
 

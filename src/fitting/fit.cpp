@@ -1,4 +1,4 @@
-#include "indentsim/fit.hpp"
+#include "indentsim/fitting/fit.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -13,7 +13,7 @@
 #include <ceres/ceres.h>
 #include <fmt/format.h>
 
-#include "indentsim/error.hpp"
+#include "indentsim/base/error.hpp"
 
 namespace indentsim {
 

@@ -1,4 +1,4 @@
-#include "indentsim/forward_model.hpp"
+#include "indentsim/fitting/forward_model.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -6,9 +6,9 @@
 
 #include <fmt/format.h>
 
-#include "indentsim/error.hpp"
-#include "indentsim/load_stepping.hpp"
-#include "indentsim/simulation.hpp"
+#include "indentsim/base/error.hpp"
+#include "indentsim/simulation/load_stepping.hpp"
+#include "indentsim/simulation/simulation.hpp"
 
 namespace indentsim {
 

@@ -1,4 +1,4 @@
-#include "indentsim/element.hpp"
+#include "indentsim/geometry/element.hpp"
 
 #include <cmath>
 

@@ -1,4 +1,4 @@
-#include "indentsim/hertz.hpp"
+#include "indentsim/geometry/hertz.hpp"
 
 #include <algorithm>
 #include <cmath>

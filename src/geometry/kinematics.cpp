@@ -1,4 +1,4 @@
-#include "indentsim/kinematics.hpp"
+#include "indentsim/geometry/kinematics.hpp"
 
 #include <numbers>
 

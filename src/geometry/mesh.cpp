@@ -1,4 +1,4 @@
-#include "indentsim/mesh.hpp"
+#include "indentsim/geometry/mesh.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,9 +8,9 @@
 
 #include <fmt/format.h>
 
-#include "indentsim/error.hpp"
-#include "indentsim/punch.hpp"
-#include "indentsim/material.hpp"
+#include "indentsim/base/error.hpp"
+#include "indentsim/geometry/punch.hpp"
+#include "indentsim/materials/material.hpp"
 
 namespace indentsim {
 

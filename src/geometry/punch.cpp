@@ -1,4 +1,4 @@
-#include "indentsim/punch.hpp"
+#include "indentsim/geometry/punch.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 
 #include <fmt/format.h>
 
-#include "indentsim/hertz.hpp"
+#include "indentsim/geometry/hertz.hpp"
 
 namespace indentsim {
 

@@ -1,4 +1,4 @@
-#include "indentsim/material.hpp"
+#include "indentsim/materials/material.hpp"
 
 #include <cmath>
 

@@ -1,4 +1,4 @@
-#include "indentsim/material_parameter.hpp"
+#include "indentsim/materials/material_parameter.hpp"
 
 #include <algorithm>
 #include <array>

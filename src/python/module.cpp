@@ -16,17 +16,17 @@
 
 #include <fmt/format.h>
 
-#include "indentsim/curve_analysis.hpp"
-#include "indentsim/error.hpp"
-#include "indentsim/fields.hpp"
-#include "indentsim/fit.hpp"
-#include "indentsim/fit_files.hpp"
-#include "indentsim/load_case.hpp"
-#include "indentsim/run_driver.hpp"
-#include "indentsim/simulation.hpp"
-#include "indentsim/sweep.hpp"
-#include "indentsim/sweep_results.hpp"
-#include "indentsim/version.hpp"
+#include "indentsim/analysis/curve_analysis.hpp"
+#include "indentsim/base/error.hpp"
+#include "indentsim/output/fields.hpp"
+#include "indentsim/fitting/fit.hpp"
+#include "indentsim/fitting/fit_files.hpp"
+#include "indentsim/input/load_case.hpp"
+#include "indentsim/driver/run_driver.hpp"
+#include "indentsim/simulation/simulation.hpp"
+#include "indentsim/study/sweep.hpp"
+#include "indentsim/study/sweep_results.hpp"
+#include "indentsim/base/version.hpp"
 
 namespace py = pybind11;
 namespace fs = std::filesystem;

@@ -1,4 +1,4 @@
-#include "indentsim/error_estimate.hpp"
+#include "indentsim/simulation/error_estimate.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -7,11 +7,11 @@
 
 #include <fmt/format.h>
 
-#include "indentsim/error.hpp"
-#include "indentsim/mesh.hpp"
-#include "indentsim/punch.hpp"
-#include "indentsim/simulation.hpp"
-#include "indentsim/solver.hpp"
+#include "indentsim/base/error.hpp"
+#include "indentsim/geometry/mesh.hpp"
+#include "indentsim/geometry/punch.hpp"
+#include "indentsim/simulation/simulation.hpp"
+#include "indentsim/solvers/solver.hpp"
 
 namespace indentsim {
 

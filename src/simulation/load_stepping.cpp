@@ -1,4 +1,4 @@
-#include "indentsim/load_stepping.hpp"
+#include "indentsim/simulation/load_stepping.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,8 +1,8 @@
-#include "indentsim/simulation.hpp"
-#include "indentsim/unloading_stiffness.hpp"
-#include "indentsim/worker_threads.hpp"
+#include "indentsim/simulation/simulation.hpp"
+#include "indentsim/solvers/unloading_stiffness.hpp"
+#include "indentsim/base/worker_threads.hpp"
 
-#include "indentsim/interruption.hpp"
+#include "indentsim/base/interruption.hpp"
 
 #include <algorithm>
 #include <array>
@@ -13,7 +13,7 @@
 
 #include <fmt/format.h>
 
-#include "indentsim/error.hpp"
+#include "indentsim/base/error.hpp"
 
 namespace indentsim {
 

@@ -1,4 +1,4 @@
-#include "indentsim/assembly.hpp"
+#include "indentsim/solvers/assembly.hpp"
 
 #include <algorithm>
 #include <limits>

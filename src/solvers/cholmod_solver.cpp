@@ -101,7 +101,7 @@ int setup(SUNLinearSolver s, SUNMatrix a) {
   return c.last_flag = SUNLS_SUCCESS;
 }
 
-int solve(SUNLinearSolver s, SUNMatrix, N_Vector x, N_Vector b, realtype) {
+int solve(SUNLinearSolver s, SUNMatrix, N_Vector x, N_Vector b, sundials::Real) {
   Cholmod& c = *self(s);
   const std::size_t n = c.pinned.size();
   const double* bb = N_VGetArrayPointer(b);

@@ -1,4 +1,4 @@
-#include "indentsim/condensation.hpp"
+#include "indentsim/solvers/condensation.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,6 +1,6 @@
-#include "indentsim/contact.hpp"
+#include "indentsim/solvers/contact.hpp"
 
-#include "indentsim/layer_forces.hpp"
+#include "indentsim/solvers/layer_forces.hpp"
 
 #include <algorithm>
 #include <cmath>

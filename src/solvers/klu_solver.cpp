@@ -35,7 +35,7 @@ struct KluSolver::State {
 
   State() {
     klu_l_defaults(&common);
-    common.ordering = 0;  // AMD (../shared/STACK.md), when no nested-dissection order is given
+    common.ordering = 0;  // AMD (docs/DESIGN.md §15), when no nested-dissection order is given
     common.btf = 0;       // a connected mesh's matrix is irreducible: one block, nothing to find
   }
   ~State() {
@@ -115,7 +115,7 @@ int setup(SUNLinearSolver s, SUNMatrix a) {
   return k.last_flag = k.factor(a);
 }
 
-int solve(SUNLinearSolver s, SUNMatrix, N_Vector x, N_Vector b, realtype) {
+int solve(SUNLinearSolver s, SUNMatrix, N_Vector x, N_Vector b, sundials::Real) {
   Klu& k = *self(s);
   if (!k.current) return k.last_flag = SUNLS_PACKAGE_FAIL_UNREC;
   N_VScale(1.0, b, x);

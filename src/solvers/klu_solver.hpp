@@ -4,7 +4,7 @@
 //
 // Why not SUNLinSol_KLU as it is: KINSOL calls a linear solver's `initialize` at every KINSol call
 // (every increment), and SUNLinSol_KLU's forces a new symbolic analysis and a full factorization
-// there (../shared/STACK.md).  The pattern of a Newton system never changes, so this solver
+// there (docs/DESIGN.md §15).  The pattern of a Newton system never changes, so this solver
 // analyses it once, in CHOLMOD's nested-dissection order (less fill than AMD on a refined mesh;
 // AMD leaves 2-3x less than KLU's default COLAMD on these matrices), with a condensed system's
 // dense interface block last.
@@ -25,7 +25,7 @@
 #include <memory>
 #include <vector>
 
-#include "indentsim/assembly.hpp"
+#include "indentsim/solvers/assembly.hpp"
 #include "sparse_direct_solver.hpp"
 
 namespace indentsim {

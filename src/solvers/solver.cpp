@@ -1,4 +1,4 @@
-#include "indentsim/solver.hpp"
+#include "indentsim/solvers/solver.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,8 +8,8 @@
 
 #include <sunlinsol/sunlinsol_spgmr.h>
 
-#include "indentsim/error.hpp"
-#include "indentsim/interruption.hpp"
+#include "indentsim/base/error.hpp"
+#include "indentsim/base/interruption.hpp"
 
 #include "cholmod_solver.hpp"
 #include "klu_solver.hpp"
@@ -108,6 +108,10 @@ struct NewtonSolver::Impl {
   sundials::KinsolMemory kinsol;
   double alpha = 0.0;
   std::string last_message;
+  sundials::ErrorRoute error_route{[](const std::string& message, void* impl) {
+                                     static_cast<Impl*>(impl)->last_message = message;
+                                   },
+                                   this};
   std::vector<double> residual_history;
   double best_residual = 0.0;
   std::vector<double> best_point;
@@ -146,7 +150,7 @@ struct NewtonSolver::Impl {
 
     sundials::check(KINInit(kinsol, residual_callback, u.get()), "KINInit");
     sundials::check(KINSetUserData(kinsol, this), "KINSetUserData");
-    sundials::check(KINSetErrHandlerFn(kinsol, error_callback, this), "KINSetErrHandlerFn");
+    sundials::route_errors(kinsol, context, &error_route);
     if (settings.newton_linear == NewtonLinearSolve::krylov) {
       gmres.reset(SUNLinSol_SPGMR(u.get(), SUN_PREC_RIGHT, krylov_dimension, context));
       if (!gmres) throw std::runtime_error("SUNLinSol_SPGMR failed");
@@ -167,7 +171,7 @@ struct NewtonSolver::Impl {
     // Convergence is judged on the residual only: a tiny step is not success.
     sundials::check(KINSetScaledStepTol(kinsol, 1e-300), "KINSetScaledStepTol");
     // The predictor can be far from the solution in scaled units (first increment from u = 0):
-    // KINSOL's default step bound would stop it (STACK.md), so allow any step.
+    // KINSOL's default step bound would stop it (docs/DESIGN.md §15), so allow any step.
     sundials::check(KINSetMaxNewtonStep(kinsol, 1e30), "KINSetMaxNewtonStep");
   }
 
@@ -204,7 +208,7 @@ struct NewtonSolver::Impl {
 
   // The fixed pattern and the Jacobian's values at u into the matrix the direct solver factors.
   // KINSOL zeroes the whole matrix it hands to jacobian_callback, index arrays included, before
-  // each call (STACK.md): the pattern is written back every time.
+  // each call (docs/DESIGN.md §15): the pattern is written back every time.
   void write_pattern(SUNMatrix j) const {
     const auto& pattern = equations.pattern();
     std::copy(pattern.column_start().begin(), pattern.column_start().end(), SUNSparseMatrix_IndexPointers(j));
@@ -280,15 +284,11 @@ struct NewtonSolver::Impl {
     return SUNLinSolSolve(me->direct->get(), me->jacobian.get(), v, v, 0.0) == SUNLS_SUCCESS ? 0 : 1;
   }
 
-  static int jacobian_times_vector(N_Vector v, N_Vector jv, N_Vector uu, sunbooleantype*, void* data) {
+  static int jacobian_times_vector(N_Vector v, N_Vector jv, N_Vector uu, sundials::Boolean*, void* data) {
     auto* me = static_cast<Impl*>(data);
     me->jacobian_at(N_VGetArrayPointer(uu));
     me->equations.pattern().multiply(me->jacobian_values, N_VGetArrayPointer(v), N_VGetArrayPointer(jv));
     return 0;
-  }
-
-  static void error_callback(int, const char* module, const char* function, char* msg, void* data) {
-    static_cast<Impl*>(data)->last_message = std::string(module) + "/" + function + ": " + msg;
   }
 
   double scaled_residual(const double* u_data) {

@@ -16,7 +16,7 @@ int free_shell_only(SUNLinearSolver s) {
 sundials::LinearSolver make_direct_solver_shell(SUNContext context, void* content,
                                                 SUNLinearSolver_ID (*id)(SUNLinearSolver),
                                                 int (*setup)(SUNLinearSolver, SUNMatrix),
-                                                int (*solve)(SUNLinearSolver, SUNMatrix, N_Vector, N_Vector, realtype),
+                                                int (*solve)(SUNLinearSolver, SUNMatrix, N_Vector, N_Vector, sundials::Real),
                                                 sunindextype (*last_flag)(SUNLinearSolver)) {
   sundials::LinearSolver shell(SUNLinSolNewEmpty(context));
   if (!shell) throw std::runtime_error("SUNLinSolNewEmpty failed");

@@ -39,7 +39,7 @@ public:
 sundials::LinearSolver make_direct_solver_shell(SUNContext context, void* content,
                                                 SUNLinearSolver_ID (*id)(SUNLinearSolver),
                                                 int (*setup)(SUNLinearSolver, SUNMatrix),
-                                                int (*solve)(SUNLinearSolver, SUNMatrix, N_Vector, N_Vector, realtype),
+                                                int (*solve)(SUNLinearSolver, SUNMatrix, N_Vector, N_Vector, sundials::Real),
                                                 sunindextype (*last_flag)(SUNLinearSolver));
 
 }  // namespace indentsim

@@ -1,4 +1,4 @@
-#include "indentsim/unloading_stiffness.hpp"
+#include "indentsim/solvers/unloading_stiffness.hpp"
 
 #include <stdexcept>
 #include <vector>

@@ -1,5 +1,5 @@
 // The sbatch script of a sweep's job array (slurm_array.hpp).
-#include "indentsim/slurm_array.hpp"
+#include "indentsim/study/slurm_array.hpp"
 
 #include <fmt/format.h>
 

@@ -1,5 +1,5 @@
 // A sweep file expanded into its runs (sweep.hpp).
-#include "indentsim/sweep.hpp"
+#include "indentsim/study/sweep.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -11,9 +11,9 @@
 #include <nlohmann/json.hpp>
 #include <toml++/toml.h>
 
-#include "indentsim/checkpoint.hpp"
-#include "indentsim/error.hpp"
-#include "indentsim/sweep_results.hpp"
+#include "indentsim/output/checkpoint.hpp"
+#include "indentsim/base/error.hpp"
+#include "indentsim/study/sweep_results.hpp"
 
 namespace fs = std::filesystem;
 

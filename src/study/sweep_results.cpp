@@ -1,5 +1,5 @@
 // A sweep's results folder, keyed by hash (sweep_results.hpp).
-#include "indentsim/sweep_results.hpp"
+#include "indentsim/study/sweep_results.hpp"
 
 #include <cerrno>
 #include <chrono>
@@ -12,11 +12,11 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "indentsim/csv_table.hpp"
-#include "indentsim/error.hpp"
-#include "indentsim/file_system.hpp"
-#include "indentsim/interruption.hpp"
-#include "indentsim/run_driver.hpp"
+#include "indentsim/input/csv_table.hpp"
+#include "indentsim/base/error.hpp"
+#include "indentsim/base/file_system.hpp"
+#include "indentsim/base/interruption.hpp"
+#include "indentsim/driver/run_driver.hpp"
 
 namespace fs = std::filesystem;
 

@@ -1,0 +1,94 @@
+#pragma once
+// The model side of a fit (fit.hpp): one data set -- a measured force-depth curve, or the
+// residual imprint after unloading -- and the load case that produces it, evaluated at material
+// parameters theta, with d(model)/d(theta).
+//
+// The runs pass exactly through the data's depths: the load path is the data's own sequence of
+// depths (Ilyushin's deformation theory is path independent on loading; a load-unload curve
+// follows the data's own path), each step subdivided to the load case's own increment length.
+// The mesh is fixed once for the whole fit (planned at one set of parameters, the element chosen
+// for the whole box of bounds), so the model is a smooth function of theta: a mesh that moved
+// with theta would make the curve jump.
+//
+// Gradients: forward sensitivities through the converged Newton system
+// (Simulation::sensitivities: one factorization and one solve per parameter at each data depth,
+// and at each reversal of an imprint's path) for the elastic model and Ilyushin's law -- on
+// loading, and on the unloading branch through the peak strain's own sensitivity -- for any
+// parameter but nu; one-sided finite differences of whole runs for J2 flow theory (its history
+// would need the return map's sensitivity over every increment) and for nu.
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "indentsim/input/load_case.hpp"
+#include "indentsim/materials/material_parameter.hpp"
+
+namespace indentsim {
+
+enum class FitDataKind {
+  force_depth_curve,  ///< P at depths alpha (loading, or a load-unload sequence)
+  imprint_profile     ///< the residual depth of the surface at radii r after the run unloads to 0
+};
+
+struct FitData {
+  FitDataKind kind = FitDataKind::force_depth_curve;
+  std::string file;    ///< where the data came from (messages, fit.json)
+  LoadCase load_case;  ///< the scene; its material holds the fixed parameters and the starting values
+  /// Curve: the depths alpha [m] in the order they were measured; imprint: the radii r [m].
+  std::vector<double> abscissa;
+  /// Curve: P [N; N/m in plane strain]; imprint: the residual depth below the original surface [m].
+  std::vector<double> values;
+  double weight = 1.0;  ///< multiplies this data set's residuals
+};
+
+/// The model at the data points, and its derivatives if asked.
+struct ModelEvaluation {
+  std::vector<double> values;
+  std::vector<std::vector<double>> jacobian;  ///< [point][parameter]: d value / d theta
+  int forward_runs = 0;                       ///< whole runs this evaluation took
+};
+
+class ForwardModel {
+public:
+  /// Fixes the mesh at `plan_at` (empty: the load case's own material; its pilot run, for a plastic
+  /// case) and the element over `bounds`, and lays the load path through the data.  Throws
+  /// InputError when the scene cannot produce the data (depths beyond the case's, an imprint that
+  /// never unloads, radii off the surface).
+  ForwardModel(FitData data, std::vector<MaterialParameter> parameters,
+               const std::vector<std::pair<double, double>>& bounds, bool finite_differences_only,
+               const std::vector<double>& plan_at = {});
+
+  /// The model at theta (in the order of the parameters).  Throws SolverError when a run fails
+  /// even after two retries with steps a quarter as long.
+  ModelEvaluation evaluate(const std::vector<double>& theta, bool with_jacobian) const;
+
+  /// Plans the mesh afresh at theta (the fit's result), as a run of the fitted case would.
+  void replan_mesh(const std::vector<double>& theta);
+
+  /// True when the jacobian comes from forward sensitivities (else finite differences).
+  bool uses_sensitivities() const { return sensitivities_; }
+  /// Why it does not, or "" when it does.
+  const std::string& finite_difference_reason() const { return fd_reason_; }
+  const FitData& data() const { return data_; }
+  /// The load case at theta, as the runs solve it (fixed mesh, the data's path).
+  LoadCase case_at(const std::vector<double>& theta) const;
+  /// The user's load case with the parameters at theta (own path and mesh): fitted_case.toml.
+  LoadCase fitted_case(const std::vector<double>& theta) const;
+  const std::vector<MaterialParameter>& parameters() const { return parameters_; }
+  double planned_contact_half_width() const { return prepared_.mesh.contact_half_width.value_or(0.0); }
+
+private:
+  std::vector<double> run_once(const LoadCase& lc, int refinement, std::vector<std::vector<double>>* jacobian) const;
+  std::vector<double> run(const LoadCase& lc, std::vector<std::vector<double>>* jacobian, int& runs) const;
+
+  FitData data_;
+  std::vector<MaterialParameter> parameters_;
+  std::vector<std::pair<double, double>> bounds_;
+  LoadCase prepared_;  ///< the data's path, the fixed mesh and element
+  std::vector<double> path_;  ///< curve: the data depths without repeats, from 0
+  std::vector<std::size_t> point_of_waypoint_;  ///< curve: data point -> index in path_
+  bool sensitivities_ = false;
+  std::string fd_reason_;
+};
+
+}  // namespace indentsim

@@ -1,0 +1,194 @@
+#pragma once
+// A load case: everything a run needs, read from a TOML file (SI units throughout).
+// The section and key names are fixed by the project so that load cases stay portable.
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "indentsim/input/curve_csv.hpp"
+
+namespace indentsim {
+
+/// The scene: plane strain (a long cylinder or wedge on a block, per unit thickness) or
+/// axisymmetry (a body of revolution on a cylindrical specimen).
+enum class SceneKind { plane_strain, axisymmetric };
+
+struct GeometryInput {
+  SceneKind kind = SceneKind::plane_strain;
+  double lx = 15e-3;  ///< block width of the half model, or the specimen's radius [m]
+  double ly = 10e-3;  ///< block depth, or the specimen's height [m]
+};
+
+enum class PunchShapeKind { sphere, cone, flat, profile };
+
+struct PunchInput {
+  PunchShapeKind shape = PunchShapeKind::sphere;
+  double radius = 2e-3;      ///< sphere (cylinder) radius, or the flat punch's radius R [m]
+  double half_angle = 70.3;  ///< cone: angle between axis and face [degrees]
+  double tip_radius = 0.0;   ///< cone: radius of the spherical cap blunting the tip (0: sharp) [m]
+  std::string profile_file;  ///< profile: the CSV file it was read from, as given ("" when inline)
+  std::vector<std::pair<double, double>> profile;  ///< profile: points (r, g(r)) [m]
+};
+
+enum class MaterialModel { elastic, ilyushin, j2 };
+enum class HardeningLaw { linear, power };
+
+struct MaterialInput {
+  MaterialModel model = MaterialModel::elastic;
+  double E = 210e9;   ///< Young's modulus [Pa]
+  double nu = 0.3;    ///< Poisson's ratio [-]
+  double e0 = 0.027;  ///< elastic limit of the strain intensity [-]
+  /// The uniaxial yield stress when the load case gave it instead of e0 [Pa] (e0 is then derived).
+  std::optional<double> yield_stress;
+  HardeningLaw hardening = HardeningLaw::linear;
+  double kappa = 0.9;  ///< linear law: omega = kappa (1 - e0/e_u)
+  double n = 0.3;      ///< power law: sigma_u ~ e_u^n
+};
+
+struct LoadInput {
+  std::vector<double> path{0.0, 5e-5};  ///< indentation depth waypoints alpha [m], from 0
+  int increments = 10;                  ///< total increments along the path
+  /// Optional per-segment counts (`increments = [n1, n2, ...]`, one per segment of the path);
+  /// empty when `increments` is a single total spread by segment length.
+  std::vector<int> segment_increments;
+};
+
+enum class ElementChoice { automatic, q1, bbar };
+
+/// The default mesh.contact_nodes under a cone (load_case.cpp says why).
+inline constexpr int cone_contact_nodes = 30;
+
+/// How a run estimates its own discretization error (error_estimate.hpp): a companion run on a
+/// mesh with half the contact nodes and the orders measured in the work-precision study
+/// ("richardson"), a second companion at a quarter to observe the order ("observed"), or none.
+enum class ErrorEstimateChoice { richardson, observed, off };
+
+struct MeshInput {
+  ElementChoice element = ElementChoice::automatic;  ///< "auto" | "q1" | "bbar"
+  int contact_nodes = 20;  ///< fine-zone elements across the estimated final contact half-width
+                           ///< (cone_contact_nodes when the key is absent and the punch is a cone)
+  std::optional<double> contact_half_width;  ///< override of the estimate a* [m]
+  std::optional<double> fine_width;          ///< override: width of the uniform zone [m]
+  std::optional<double> fine_depth;          ///< override: depth of the uniform zone [m]
+  std::optional<double> growth;              ///< override: geometric growth ratio of the far field
+  ErrorEstimateChoice error_estimate = ErrorEstimateChoice::richardson;
+  /// The relative error of the final P asked for: the run chooses contact_nodes (error_estimate.hpp).
+  std::optional<double> target_error;
+};
+
+struct OutputInput {
+  std::string dir = "out";  ///< output folder (relative to the working directory)
+  int fields_every = 0;     ///< VTU every N increments (0: the final state only)
+  std::vector<double> profile_depths;  ///< depths [m] of the stress profiles besides the surface
+  int checkpoint_every = 10;  ///< checkpoint every N increments and at the end (0: only on SIGINT/SIGTERM)
+  int keep_checkpoints = 2;   ///< newest checkpoints kept besides every reversal's (0 = "all")
+};
+
+enum class LinearSolverChoice { automatic, klu, cholmod };
+/// Whether the linear-elastic far field is condensed out of the Newton systems (docs/DESIGN.md 7).
+enum class FarFieldChoice { automatic, condense, full };
+/// How a Newton iteration solves its linear system (docs/DESIGN.md §8): GMRES preconditioned by a
+/// factorization kept across the iterations (krylov), a factorization per iteration that a
+/// converging iteration may keep (reuse, a chord step), or a factorization every iteration
+/// (fresh); automatic: krylov for an inelastic specimen, reuse for an elastic one.
+enum class JacobianChoice { automatic, reuse, fresh, krylov };
+
+struct SolverInput {
+  LinearSolverChoice linear = LinearSolverChoice::klu;  ///< "klu" (default) | "cholmod" | "auto"
+  FarFieldChoice far_field = FarFieldChoice::automatic;  ///< "auto" (default) | "condense" | "full"
+  JacobianChoice jacobian = JacobianChoice::automatic;   ///< "auto" (default) | "krylov" | "reuse" | "fresh"
+  double tolerance = 1e-11;  ///< residual max-norm relative to E* x max depth
+  int max_newton = 50;       ///< Newton iterations per increment before a cutback
+  int max_cutbacks = 10;     ///< halvings of one increment before the run stops
+};
+
+/// How load-unload curves are analysed (indentation_analysis.hpp): Oliver-Pharr's constants and
+/// the indenter's elasticity.  They do not change the simulation.
+struct AnalysisInput {
+  std::vector<double> fit_range{0.2, 0.98};  ///< unloading fit over these fractions of P_max
+  std::optional<double> epsilon;             ///< h_c = h_max - epsilon P_max / S (default by shape)
+  double beta = 1.0;                         ///< E_r = sqrt(pi) / (2 beta) S / sqrt(A) (1.034: Berkovich)
+  std::optional<double> indenter_E;          ///< [Pa]; none: a rigid indenter
+  double indenter_nu = 0.07;                 ///< diamond
+};
+
+struct LoadCase {
+  std::string source = "<defaults>";  ///< file it was read from, for messages
+  GeometryInput geometry;
+  PunchInput punch;
+  MaterialInput material;
+  LoadInput load;
+  MeshInput mesh;
+  OutputInput output;
+  SolverInput solver;
+  AnalysisInput analysis;
+
+  double max_depth() const;
+};
+
+/// Reads and validates a load case.  `overrides` are "section.key=value" strings
+/// (the CLI's --set) applied before validation; values are parsed as TOML values,
+/// falling back to a plain string.  Throws InputError naming file, key and problem.
+LoadCase read_load_case(const std::filesystem::path& file,
+                        const std::vector<std::string>& overrides = {});
+
+/// A double as TOML text: the shortest form that reads back to the same double, always a float.
+std::string toml_number(double value);
+/// A TOML basic string holding `s`: how a path or a word is passed through a "key=value" override.
+std::string toml_string(const std::string& s);
+
+/// Parses a load case from TOML text (tests, fuzzing); `source` names it in messages.
+LoadCase parse_load_case(const std::string& toml_text, const std::string& source,
+                         const std::vector<std::string>& overrides = {});
+
+/// What `indentsim analyze` reads besides a measured curve: the indenter (every punch.* key;
+/// punch.shape required), the scene (geometry.kind, axisymmetric unless given), the analysis.*
+/// keys, the specimen's material.nu (optional: for the specimen modulus) and the [curve] keys
+/// (depth_column, force_column, depth_unit, force_unit; see curve_csv.hpp).  No other key.
+struct AnalysisSetup {
+  std::string source;  ///< the TOML file, or "--set"
+  SceneKind scene = SceneKind::axisymmetric;
+  PunchInput punch;
+  AnalysisInput analysis;
+  std::optional<double> specimen_nu;
+  CurveColumns columns;
+};
+
+/// Reads an analysis setup from a small TOML file (or none: only `overrides`); throws InputError.
+AnalysisSetup read_analysis_setup(const std::optional<std::filesystem::path>& file,
+                                  const std::vector<std::string>& overrides);
+
+/// Checks every physical constraint (E > 0, -1 < nu < 0.5, ...); throws InputError.
+void validate(const LoadCase& load_case);
+
+/// The load case as TOML (every key, defaults filled in): what a run actually used.
+std::string to_toml(const LoadCase& load_case);
+
+/// The uniaxial yield stress of Ilyushin's law: sigma_y = sigma_u(e0) = 3 mu e0, mu = E / (2 (1 + nu)).
+double yield_stress_of_e0(double e0, double E, double nu);
+/// Its inverse, e0 = sigma_y / (3 mu): how material.yield_stress becomes e0.
+double e0_of_yield_stress(double yield_stress, double E, double nu);
+
+/// One load-case key as `indentsim keys` and the README describe it.
+struct KeyDescription {
+  std::string key;            ///< section.name
+  std::string type, default_value, range, unit, help;
+  bool required = false;
+};
+/// Every key a load case accepts, in case.toml's order, from the same declarations the reader uses.
+std::vector<KeyDescription> describe_keys();
+/// The keys as a Markdown table (the README's).
+std::string keys_markdown();
+
+/// The first key among the physics and mesh keys (geometry, punch, material, mesh) where two
+/// load cases differ, or "" if they agree: what a resumed run may not change.
+std::string first_physics_difference(const LoadCase& a, const LoadCase& b);
+
+std::string to_string(MaterialModel model);
+std::string to_string(SceneKind kind);
+std::string to_string(PunchShapeKind shape);
+std::string to_string(HardeningLaw law);
+
+}  // namespace indentsim

@@ -1,0 +1,37 @@
+#pragma once
+// The material parameters a fit may identify, by their load-case keys: material.E, material.nu,
+// material.e0 or material.yield_stress (the uniaxial yield stress users think in; e0 follows from
+// it, e0 = sigma_y / (3 mu)), material.kappa (linear hardening) and material.n (power hardening).
+// One place for their names, their values in a load case and their physically safe ranges.
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "indentsim/input/load_case.hpp"
+
+namespace indentsim {
+
+enum class MaterialParameter { E, nu, e0, yield_stress, kappa, n };
+
+/// "material.E", ...
+std::string key_of(MaterialParameter parameter);
+/// The parameter of a key ("material.yield_stress"), or nullopt when the key is not a fittable one.
+std::optional<MaterialParameter> parameter_of_key(const std::string& key);
+/// Every fittable key, for messages.
+std::string fittable_keys();
+
+/// The parameter's value in a load case (yield_stress: given, or derived from e0).
+double value_of(const MaterialInput& material, MaterialParameter parameter);
+/// Sets the parameter, keeping the others as the load case states them: with yield_stress the
+/// load case then carries sigma_y and e0 follows from it (also when E or nu change afterwards).
+void set_value(MaterialInput& material, MaterialParameter parameter, double value);
+
+/// The open interval of values the model accepts: E > 0, -1 < nu < 0.5, e0 and sigma_y > 0,
+/// kappa in [0, 1), n in (0, 1).  A bound outside it is refused.
+std::pair<double, double> physical_range(MaterialParameter parameter);
+/// Default fit bounds around a start value: a factor 10 either way for E, e0 and sigma_y (within the
+/// physical range), nu in [0, 0.49], kappa in [0, 0.99], n in [0.01, 0.9].
+std::pair<double, double> default_bounds(MaterialParameter parameter, double start);
+
+}  // namespace indentsim

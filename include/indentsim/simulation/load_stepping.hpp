@@ -1,0 +1,43 @@
+#pragma once
+// The load path: the depth alpha is stepped along piecewise-linear waypoints.
+#include <vector>
+
+#include "indentsim/input/load_case.hpp"
+
+namespace indentsim {
+
+/// Depths at the end of each planned increment (alpha_0 = 0 first, then `increments` values).
+/// Increments are spread over the segments in proportion to their length |delta alpha|
+/// (largest-remainder rounding, at least one per non-empty segment), uniform within a segment.
+std::vector<double> plan_increments(const std::vector<double>& path, int increments);
+/// The same, honouring per-segment counts when the load case gives them.
+std::vector<double> plan_increments(const LoadInput& load);
+
+/// The planned increments (indices into `targets`) where the load path reverses: every peak and
+/// every valley strictly inside the path.
+std::vector<int> reversal_steps(const std::vector<double>& targets);
+/// The planned increments after which the depth falls (holds and equal depths included: the
+/// last increment before each descent).  Where the path is at its deepest so far, that state is
+/// the peak Ilyushin's unloading branch starts from.
+std::vector<int> descent_starts(const std::vector<double>& targets);
+
+/// One converged increment, as written to curve.csv.
+struct IncrementRecord {
+  int step = 0;               ///< 0 = the unloaded initial state
+  double alpha = 0.0;         ///< indentation depth [m]
+  double force = 0.0;         ///< P, both halves, per unit thickness [N/m]
+  double half_width = 0.0;    ///< contact half-width a [m]
+  int contact_nodes = 0;      ///< nodes in contact, the axis node included
+  long newton_iterations = 0; ///< over every attempt of this increment, failed ones included
+  long factorizations = 0;    ///< numeric LU factorizations over every attempt
+  int cutbacks = 0;           ///< halvings needed to reach this increment
+  long plastic_points = 0;    ///< Gauss points beyond the elastic limit
+  double max_strain_intensity = 0.0;  ///< largest e_u over the Gauss points
+  double wall_seconds = 0.0;  ///< wall-clock time spent on this increment
+};
+
+/// Secant predictor: extrapolates the last two converged states linearly in alpha.
+void extrapolate(const std::vector<double>& u_previous, double alpha_previous, const std::vector<double>& u_current,
+                 double alpha_current, double alpha_next, std::vector<double>& guess);
+
+}  // namespace indentsim

@@ -1,0 +1,220 @@
+#pragma once
+// A run, from load case to P-alpha curve: plans and builds the mesh, assembles the elastic
+// stiffness, sets up contact and the Newton solver, and steps the depth along the load path.
+// The CLI is a thin layer over this class; the tests drive it directly.
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "indentsim/solvers/assembly.hpp"
+#include "indentsim/solvers/condensation.hpp"
+#include "indentsim/solvers/contact.hpp"
+#include "indentsim/solvers/layer_forces.hpp"
+#include "indentsim/input/load_case.hpp"
+#include "indentsim/simulation/load_stepping.hpp"
+#include "indentsim/materials/material_parameter.hpp"
+#include "indentsim/geometry/mesh.hpp"
+#include "indentsim/base/phase_times.hpp"
+#include "indentsim/solvers/inelastic_bulk.hpp"
+#include "indentsim/solvers/solver.hpp"
+
+namespace indentsim {
+
+/// Everything that changes while a run goes on: with the load case (and the mesh plan) it is all
+/// a checkpoint needs to continue the run bit for bit.
+struct SimulationState {
+  double alpha = 0.0, alpha_previous = 0.0, deepest = 0.0;
+  bool has_previous = false;
+  int rows = 0;                    ///< increments reported so far
+  std::uint64_t next_target = 0;   ///< index of the next planned depth
+  bool warned_fine_zone = false;
+  std::vector<std::string> warnings;
+  std::vector<double> u, u_previous;  ///< displacement and the previous one (the predictor's)
+  std::vector<double> history;        ///< the bulk model's carried material state
+  std::vector<char> in_contact;       ///< the active contact set at u (implied by u; kept as a check)
+  NearField near_field;               ///< what the Newton iterations solve for (it may have grown)
+  PlasticZoneGrowth plastic_zone_growth;  ///< the pilot's, which grows near_field ahead (empty: none)
+};
+
+/// The mesh a run uses: planned from the Hertz estimate of the contact, or for a plastic case
+/// from a coarse pilot run of the same case (its contact width and plastic zone); `check` prints
+/// exactly this plan.  `planned_contact_half_width` (a resumed run) skips the pilot.
+struct RunPlan {
+  MeshPlan mesh;
+  PlasticZoneGrowth plastic_zone;  ///< from the pilot, sizes the condensed near field as it grows
+};
+RunPlan plan_run(const LoadCase& load_case, std::optional<double> planned_contact_half_width = std::nullopt);
+
+/// The element a load case gets: mesh.element, or for "auto" B-bar where Q1 would lock (nu >=
+/// 0.45, nearly perfect plasticity, a plastic material under a cone), the paper's Q1 elsewhere.
+ElementKind choose_element(const LoadCase& load_case);
+
+/// Warnings (not errors) about values that run but are probably a slip: E outside 1 kPa - 2 TPa,
+/// alpha / R > 0.05, an estimated contact half-width above 0.1 of lx or ly.
+std::vector<std::string> plausibility_warnings(const LoadCase& load_case, const MeshPlan& plan);
+
+class Simulation {
+public:
+  /// Throws InputError when the load case asks for a model not available or a mesh too large.
+  /// `planned_contact_half_width`, when given, sizes the mesh without a pilot run (a resumed run
+  /// rebuilds exactly the mesh of the run it continues), and `near_field`, when given, is the
+  /// condensed near field to solve for (a resumed run continues on the near field it had).
+  explicit Simulation(LoadCase load_case, std::optional<double> planned_contact_half_width = std::nullopt,
+                      std::optional<NearField> near_field = std::nullopt);
+  /// A run on a given plan, no pilot: the error estimate's companion runs (error_estimate.hpp)
+  /// use the main run's planned contact width with fewer contact nodes, and a new run whose plan
+  /// was made first (its companions start from the plan) continues from it.  `times` holds the
+  /// phases timed before (planning).
+  Simulation(LoadCase load_case, const RunPlan& plan, PhaseTimes times = {});
+  ~Simulation();
+
+  const LoadCase& load_case() const { return load_case_; }
+  const MeshPlan& plan() const { return plan_; }
+  const Mesh& mesh() const { return *mesh_; }
+  const ContactBoundary& contact_boundary() const { return *contact_; }
+  const BulkModel& bulk() const { return *bulk_; }
+  /// The inelastic model, or nullptr for an elastic load case (which never enters plasticity code).
+  const InelasticBulk* plasticity() const { return plastic_.get(); }
+  /// Newton report of the last attempt (for diagnostics and tests).
+  const NewtonReport& last_newton_report() const { return last_report_; }
+
+  /// Steps the whole load path, calling `on_increment` after every converged increment (the
+  /// initial state alpha = 0 included).  Throws SolverError when an increment cannot converge
+  /// within the allowed cutbacks; the increments reported before stay valid.
+  void run(const std::function<void(const IncrementRecord&)>& on_increment = {});
+
+  /// Solves one increment from the current state to depth `alpha` (with cutbacks).
+  IncrementRecord advance_to(double alpha);
+
+  SimulationState state() const;
+  /// Continues from a saved state (same load case physics, same mesh); throws
+  /// std::invalid_argument when the state does not fit this mesh and model.
+  void restore(const SimulationState& state);
+  std::uint64_t next_target() const { return next_target_; }
+
+  double alpha() const { return alpha_; }
+  const std::vector<double>& displacement() const { return u_; }
+  ContactResult contact() const;
+  double contact_half_width() const;
+  /// The exact unloading stiffness -dP/d(alpha) at the current state (unloading_stiffness.hpp).
+  double unloading_stiffness() const;
+  /// The depth at which the punch would first touch the current surface, max_k (-v_k - g(x_k)):
+  /// after separation, the residual depth of the imprint where the punch left it.
+  double free_surface_depth() const;
+  std::vector<LayerForce> layer_forces() const;
+  /// dP/d(theta) and du/d(theta) at the current state for each parameter, by forward sensitivity
+  /// through the converged Newton system: at fixed depth F(u(theta); theta) = 0, so J du/d(theta) =
+  /// -dF/d(theta) (one factorization of J at u, one solve per parameter), and P = -f sum r_k over
+  /// the contact nodes moves with dr_k = dF_k/d(theta) + K_t du/d(theta).  Available for the elastic
+  /// model and for Ilyushin's law, for E, e0, yield_stress, kappa and n (E at fixed e0, or at fixed
+  /// yield_stress when the load case gives the material that way).  On Ilyushin's unloading branch
+  /// the stresses depend on theta through the peak strain too: a call at the peak (any loading
+  /// state) records d eps*/d theta for the unloading states after it, so the call must be made at
+  /// the last loading state before the path turns (ForwardModel calls it at every data depth of a
+  /// curve, and at each descent_starts() increment of an imprint's path).
+  /// nullopt otherwise (nu, J2's history, an unloading state without the peak's record, or one
+  /// restored from a checkpoint): finite differences of whole runs are then the way.  Counts its
+  /// factorization.
+  struct Sensitivities {
+    std::vector<double> force;                      ///< dP/d(theta) [N or N/m per unit of theta]
+    std::vector<std::vector<double>> displacement;  ///< [parameter][equation] du/d(theta), whole mesh
+                                                    ///< (empty unless asked for)
+  };
+  std::optional<Sensitivities> sensitivities(const std::vector<MaterialParameter>& parameters,
+                                             bool with_displacement = false);
+  /// The force part of sensitivities().
+  std::optional<std::vector<double>> force_sensitivities(const std::vector<MaterialParameter>& parameters);
+  long symbolic_analyses() const {
+    return retired_symbolic_analyses_ + (newton_ ? newton_->total_symbolic_analyses() : 0);
+  }
+  /// The largest condition estimate of any converged increment's Jacobian so far.
+  double largest_condition_estimate() const { return largest_condition_; }
+  /// The sparse direct solver chosen for this run (solver.linear, "auto" resolved).
+  LinearSolverKind linear_solver() const { return linear_solver_; }
+  /// Warnings raised so far (each once), e.g. a contact zone that left the fine zone.
+  const std::vector<std::string>& warnings() const { return warnings_; }
+  /// The part of the mesh the Newton iterations solve for (condensed or not).
+  const NearField& near_field() const { return near_; }
+  /// Unknowns of each Newton system: the condensed near field, or all free equations.
+  std::int64_t system_unknowns() const;
+  /// Times the near field had to grow (a far element would have yielded, or a far surface node
+  /// would have penetrated the punch) and an increment was repeated.
+  int near_field_growths() const { return near_field_growths_; }
+  /// How often the near field was grown ahead of the plastic zone (anticipate_plastic_zone).
+  int near_field_rebuilds() const { return near_field_rebuilds_; }
+  /// The pilot's plastic zone by depth (empty without a pilot); a resumed run has it from its
+  /// checkpoint.
+  const PlasticZoneGrowth& plastic_zone_growth() const { return plastic_zone_growth_; }
+  /// Wall-clock time of this simulation's phases: planning (with the pilot run), model (mesh,
+  /// assembly, laws, contact, condensation, KINSOL set-up), stepping (the increments, including a
+  /// rebuild when the near field grows).  The driver adds its own (output).
+  PhaseTimes& times() { return times_; }
+  const PhaseTimes& times() const { return times_; }
+
+private:
+  /// Builds mesh, laws, contact and the Newton system on `plan`.
+  void build(const RunPlan& plan, const std::optional<NearField>& near_field);
+  struct SolveCounters {
+    long iterations = 0, factorizations = 0;
+  };
+  /// The Newton solve at depth `trial` with its globalisation ladder; true if it converged.
+  bool solve_at(double trial, SolveCounters& counters, const std::function<void()>& stop_if_requested);
+  /// Makes the converged trial (in guess_) the current state.
+  void commit(double trial);
+  IncrementRecord record(double wall_seconds, long iterations, long factorizations, int cutbacks);
+  /// Initial guess for depth `trial` into guess_ (counts any solve it needs).
+  void predict(double trial, long& iterations, long& factorizations);
+  /// Every surface node of the committed state strictly below the punch (no contact, no load).
+  bool clear_of_punch() const;
+  void check_fine_zone(double half_width);
+  /// (Re)builds the Newton system for near_: condensation, operators, contact, KINSOL.
+  void build_system();
+  /// The bulk operators the Newton system uses (plastic, and linear elastic for the predictor).
+  BulkOperator& system_bulk();
+  BulkOperator& system_elastic_bulk();
+  void to_system(const std::vector<double>& u, std::vector<double>& u_system) const;
+  void from_system(const std::vector<double>& u_system, std::vector<double>& u) const;
+  /// In a condensed run: grows near_ if the converged full solution `u` at depth `alpha` breaks the
+  /// condensation's assumption; true if it grew (the increment must be repeated).
+  bool grow_near_field(const std::vector<double>& u, double alpha);
+  /// Grows the near field ahead of the pilot's plastic zone before an increment to `target`.
+  void anticipate_plastic_zone(double target);
+  NearField near_field_for_depth(double depth) const;
+
+  LoadCase load_case_;
+  MeshPlan plan_;
+  std::unique_ptr<Mesh> mesh_;
+  std::unique_ptr<StiffnessPattern> pattern_;
+  std::unique_ptr<ElasticStiffness> stiffness_;
+  std::unique_ptr<InelasticBulk> plastic_;
+  BulkModel* bulk_ = nullptr;  // stiffness_ or plastic_
+  std::unique_ptr<ContactBoundary> contact_;
+  NewtonSettings settings_;
+  NearField near_;
+  std::unique_ptr<FarFieldCondensation> condensation_;      // null when the whole mesh is solved
+  std::unique_ptr<CondensedBulk> condensed_bulk_, condensed_elastic_;
+  std::unique_ptr<ContactEquations> equations_;
+  std::unique_ptr<NewtonSolver> newton_;                    // null until the system is built
+  long retired_symbolic_analyses_ = 0;                      // of systems replaced by a larger near field
+  int near_field_growths_ = 0;
+  int near_field_rebuilds_ = 0;
+  PlasticZoneGrowth plastic_zone_growth_;  // the pilot's, empty without one
+
+  double alpha_ = 0.0, alpha_previous_ = 0.0;
+  double deepest_ = 0.0;  ///< the largest converged depth so far (the load path's peak)
+  std::vector<double> u_, u_previous_, guess_, system_guess_;
+  bool has_previous_ = false;
+  int rows_ = 0;
+  std::uint64_t next_target_ = 0;
+  std::vector<std::string> warnings_;
+  bool warned_fine_zone_ = false;
+  NewtonReport last_report_;
+  PhaseTimes times_;
+  LinearSolverKind linear_solver_ = LinearSolverKind::klu;
+  double largest_condition_ = 0.0;
+};
+
+}  // namespace indentsim

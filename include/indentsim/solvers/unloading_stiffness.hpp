@@ -1,0 +1,20 @@
+#pragma once
+// The exact unloading stiffness S = -dP/d(alpha) at a reversal.
+//
+// Both plastic models unload elastically from the peak state (Ilyushin's unloading theorem; J2's
+// elastic predictor), and at the onset of unloading every node in contact stays in contact (its
+// pressure is positive).  So S is the stiffness of the linear elastic body with the peak's
+// contact nodes moving with the punch, dv_k/d(alpha) = -1, and the others free:
+//   K_ff w_f = -K_fA w_A,   w_A = -1,   S = f sum_{k in A} -(K w)_k   (f the symmetry factor),
+// one sparse Cholesky solve (Eigen's SimplicialLDLT) on the whole mesh -- no finite difference,
+// no dependence on the increment size.  A flat punch included: its rim node is in A.
+#include "indentsim/solvers/assembly.hpp"
+#include "indentsim/solvers/contact.hpp"
+
+namespace indentsim {
+
+/// S [N/m in axisymmetry, N/m per m in plane strain] for the contact set of `state`.
+double elastic_unloading_stiffness(const ElasticStiffness& stiffness, const ContactBoundary& contact,
+                                   const ContactResult& state);
+
+}  // namespace indentsim

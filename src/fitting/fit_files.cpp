@@ -1,0 +1,390 @@
+#include "indentsim/fitting/fit_files.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <toml++/toml.h>
+
+#include "indentsim/input/csv_table.hpp"
+#include "indentsim/base/error.hpp"
+#include "indentsim/base/file_system.hpp"
+
+namespace indentsim {
+
+namespace {
+
+std::string lower(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+/// Splits "a,b" lists of --free.
+std::vector<std::string> split_list(const std::vector<std::string>& items) {
+  std::vector<std::string> keys;
+  for (const auto& item : items) {
+    std::stringstream in(item);
+    for (std::string k; std::getline(in, k, ',');)
+      if (!trim_csv_field(k).empty()) keys.push_back(trim_csv_field(k));
+  }
+  return keys;
+}
+
+/// A header field "r (um)" as its name and unit.
+std::pair<std::string, std::string> field_name_and_unit(const std::string& field) {
+  const std::string f = trim_csv_field(field);
+  if (!f.empty() && (f.back() == ')' || f.back() == ']')) {
+    const auto at = f.rfind(f.back() == ')' ? '(' : '[');
+    if (at != std::string::npos)
+      return {trim_csv_field(f.substr(0, at)), trim_csv_field(f.substr(at + 1, f.size() - at - 2))};
+  }
+  return {f, ""};
+}
+
+/// Does the file's header name both columns?  (A run's curve.csv names alpha and P.)
+bool header_names(const std::filesystem::path& file, const std::string& a, const std::string& b) {
+  const CsvTable t = read_csv_table(file, std::size_t{1} << 30, [&](const std::string& p) { throw InputError(file.string(), "curve", p); });
+  for (const auto& row : t.rows) {
+    bool has_a = false, has_b = false;
+    for (const auto& f : row) {
+      const std::string name = lower(field_name_and_unit(f).first);
+      has_a = has_a || name == lower(a);
+      has_b = has_b || name == lower(b);
+    }
+    if (has_a && has_b) return true;
+  }
+  return false;
+}
+
+/// An imprint profile: columns `radius_column` and `depth_column` (by header), lengths in `unit`,
+/// in the header, or metres.
+void read_imprint(const std::filesystem::path& file, const std::string& radius_column, const std::string& depth_column,
+                  const std::string& unit, FitData& d) {
+  const std::string name = file.string();
+  const CsvTable t = read_csv_table(file, std::size_t{1} << 30, [&](const std::string& p) { throw InputError(name, "imprint", p); });
+  std::optional<std::size_t> header;
+  std::size_t rc = 0, dc = 0;
+  for (std::size_t k = 0; k < t.rows.size() && !header; ++k) {
+    std::optional<std::size_t> r, dd;
+    for (std::size_t c = 0; c < t.rows[k].size(); ++c) {
+      const std::string n = lower(field_name_and_unit(t.rows[k][c]).first);
+      if (n == lower(radius_column)) r = c;
+      if (n == lower(depth_column)) dd = c;
+    }
+    if (r && dd) {
+      header = k;
+      rc = *r;
+      dc = *dd;
+    }
+  }
+  if (!header)
+    throw InputError(name, "radius_column", fmt::format("no header row names both \"{}\" and \"{}\"", printable(radius_column, 40),
+                                                        printable(depth_column, 40)));
+  const auto scale_of = [&](std::size_t column, const char* key) {
+    std::string u = unit.empty() ? field_name_and_unit(t.rows[*header][column]).second : unit;
+    if (u.empty()) u = "m";
+    const double f = depth_unit_factor(u);
+    if (f == 0.0) throw InputError(name, key, fmt::format("\"{}\" is not a length unit (nm, um, mm, m)", printable(u, 20)));
+    return f;
+  };
+  const double r_scale = scale_of(rc, "unit"), d_scale = scale_of(dc, "unit");
+  for (std::size_t k = *header + 1; k < t.rows.size(); ++k) {
+    const auto& row = t.rows[k];
+    double r = 0.0, depth = 0.0;
+    if (rc >= row.size() || dc >= row.size() || !parse_csv_number(row[rc], r) || !parse_csv_number(row[dc], depth))
+      throw InputError(name, fmt::format("row {}", k + 1), "needs a number in both the radius and the depth column");
+    d.abscissa.push_back(r * r_scale);
+    d.values.push_back(depth * d_scale);
+  }
+}
+
+std::pair<double, double> parse_bounds(const std::string& text, const std::string& where, const std::string& key) {
+  const auto colon = text.find(':');
+  double lo = 0.0, hi = 0.0;
+  if (colon == std::string::npos || !parse_csv_number(text.substr(0, colon), lo) || !parse_csv_number(text.substr(colon + 1), hi))
+    throw InputError(where, key, fmt::format("bounds \"{}\" are not lower:upper numbers", printable(text, 60)));
+  return {lo, hi};
+}
+
+MaterialParameter parameter_or_fail(const std::string& key, const std::string& where) {
+  const auto p = parameter_of_key(key);
+  if (!p) throw InputError(where, printable(key, 60), fmt::format("is not a parameter a fit can free (free: {})", fittable_keys()));
+  return *p;
+}
+
+FitData read_curve_data(const std::filesystem::path& file, LoadCase lc, CurveColumns columns) {
+  const bool named = !columns.depth_column.empty() || !columns.force_column.empty();
+  if (!named && header_names(file, "alpha", "P")) {
+    columns.depth_column = "alpha";
+    columns.force_column = "P";
+  }
+  columns.default_depth_unit = "m";
+  columns.default_force_unit = "N";
+  const LoadDepthCurve curve = read_curve_csv(file, columns);
+  FitData d;
+  d.kind = FitDataKind::force_depth_curve;
+  d.file = file.string();
+  d.load_case = std::move(lc);
+  d.abscissa = curve.depth;
+  d.values = curve.force;
+  // A run's curve starts at the unloaded state alpha = 0, P = 0: it carries no information.
+  while (!d.abscissa.empty() && d.abscissa.front() == 0.0 && d.values.front() == 0.0) {
+    d.abscissa.erase(d.abscissa.begin());
+    d.values.erase(d.values.begin());
+  }
+  return d;
+}
+
+}  // namespace
+
+FitJob read_fit_job(const FitCommandLine& cl) {
+  FitJob job;
+  FitProblem& problem = job.problem;
+  std::vector<std::string> free = split_list(cl.free);
+  std::vector<std::pair<std::string, std::pair<double, double>>> bounds;
+  for (const auto& b : cl.bounds) {
+    const auto eq = b.find('=');
+    if (eq == std::string::npos) throw InputError("--bounds", printable(b, 60), "expects key=lower:upper");
+    bounds.emplace_back(b.substr(0, eq), parse_bounds(b.substr(eq + 1), "--bounds", b.substr(0, eq)));
+  }
+  std::string bounds_source = "--bounds";
+
+  toml::table root;
+  try {
+    root = toml::parse_file(cl.input);
+  } catch (const toml::parse_error& e) {
+    throw InputError(cl.input, "toml", std::string(e.description()));
+  }
+  const bool fit_file = root.contains("fit") || root.contains("data");
+  if (fit_file) {
+    if (!cl.data_files.empty())
+      throw InputError(cl.input, "--data", "is a fit file: its [[data]] tables name the data (no --data)");
+    const std::filesystem::path base = std::filesystem::path(cl.input).parent_path();
+    const toml::table* fit = root["fit"].as_table();
+    if (!fit) throw InputError(cl.input, "fit", "a fit file needs a [fit] table (free = [...])");
+    for (const auto& [k, v] : *fit) {
+      const std::string key(k.str());
+      if (key != "free" && key != "bounds" && key != "starts" && key != "out" && key != "single_level")
+        throw InputError(cl.input, "fit." + printable(key, 40),
+                         "is not a fit key (free, bounds, starts, out, single_level)");
+    }
+    if (const auto* list = (*fit)["free"].as_array()) {
+      for (const auto& item : *list) {
+        const auto s = item.value<std::string>();
+        if (!s) throw InputError(cl.input, "fit.free", "must list keys as strings");
+        free.push_back(*s);
+      }
+    }
+    if (const auto* b = (*fit)["bounds"].as_table()) {
+      bounds_source = cl.input;
+      for (const auto& [k, v] : *b) {
+        const auto* pair = v.as_array();
+        const auto lo = pair && pair->size() == 2 ? (*pair)[0].value<double>() : std::nullopt;
+        const auto hi = pair && pair->size() == 2 ? (*pair)[1].value<double>() : std::nullopt;
+        if (!lo || !hi) throw InputError(cl.input, "fit.bounds." + std::string(k.str()), "must be [lower, upper]");
+        bounds.emplace_back(std::string(k.str()), std::pair{*lo, *hi});
+      }
+    }
+    if (const auto* node = (*fit)["starts"].node()) {
+      const auto s = node->value_exact<int64_t>();
+      if (!s) throw InputError(cl.input, "fit.starts", "must be an integer");
+      problem.settings.starts = static_cast<int>(std::clamp<int64_t>(*s, -1, 1000));
+    }
+    if (const auto* node = (*fit)["out"].node()) {
+      const auto o = node->value_exact<std::string>();
+      if (!o) throw InputError(cl.input, "fit.out", "must be a folder name (a string)");
+      job.out_dir = *o;
+    }
+    if (const auto* node = (*fit)["single_level"].node()) {
+      const auto b = node->value_exact<bool>();
+      if (!b) throw InputError(cl.input, "fit.single_level", "must be true or false");
+      if (*b) problem.settings.coarse_first = false;
+    }
+    const toml::array* data = root["data"].as_array();
+    if (!data || data->empty()) throw InputError(cl.input, "data", "a fit file needs at least one [[data]] table");
+    int index = 0;
+    for (const auto& node : *data) {
+      ++index;
+      const toml::table* t = node.as_table();
+      const std::string where = fmt::format("data[{}]", index);
+      if (!t) throw InputError(cl.input, where, "must be a table ([[data]])");
+      static const std::vector<std::string> known{"case", "curve", "imprint", "weight", "set", "depth_column", "force_column",
+                                                  "depth_unit", "force_unit", "radius_column", "unit"};
+      for (const auto& [k, v] : *t)
+        if (std::find(known.begin(), known.end(), std::string(k.str())) == known.end())
+          throw InputError(cl.input, where + "." + printable(std::string(k.str()), 40), "is not a [[data]] key");
+      const auto text = [&](const char* key) { return (*t)[key].value<std::string>(); };
+      const auto case_file = text("case");
+      if (!case_file) throw InputError(cl.input, where + ".case", "names the load case of this data set (required)");
+      std::vector<std::string> overrides = cl.overrides;
+      if (const auto* set = (*t)["set"].as_array())
+        for (const auto& s : *set)
+          if (auto v = s.value<std::string>()) overrides.push_back(*v);
+      LoadCase lc = read_load_case(base / *case_file, overrides);
+      const auto curve = text("curve"), imprint = text("imprint");
+      if (curve.has_value() == imprint.has_value())
+        throw InputError(cl.input, where, "needs exactly one of curve = \"...\" and imprint = \"...\"");
+      FitData d;
+      if (curve) {
+        CurveColumns columns{text("depth_column").value_or(""), text("force_column").value_or(""),
+                             text("depth_unit").value_or(""), text("force_unit").value_or(""), "", ""};
+        d = read_curve_data(base / *curve, std::move(lc), columns);
+      } else {
+        d.kind = FitDataKind::imprint_profile;
+        d.file = (base / *imprint).string();
+        d.load_case = std::move(lc);
+        read_imprint(base / *imprint, text("radius_column").value_or("r"), text("depth_column").value_or("depth"),
+                     text("unit").value_or(""), d);
+      }
+      if (auto w = (*t)["weight"].value<double>()) {
+        if (!(*w > 0.0 && std::isfinite(*w))) throw InputError(cl.input, where + ".weight", "must be > 0");
+        d.weight = *w;
+      }
+      problem.data.push_back(std::move(d));
+    }
+  } else {
+    if (cl.data_files.empty())
+      throw InputError(cl.input, "--data", "a load case needs its measured curve: --data CURVE.csv (or give a fit file)");
+    for (const auto& file : cl.data_files) {
+      std::error_code ec;
+      if (!std::filesystem::is_regular_file(file, ec)) throw InputError(file, "--data", "is not a readable file");
+      problem.data.push_back(read_curve_data(file, read_load_case(cl.input, cl.overrides), cl.columns));
+    }
+  }
+  if (cl.starts) problem.settings.starts = *cl.starts;
+  if (problem.settings.starts < 1 || problem.settings.starts > 100)
+    throw InputError(cl.starts ? "--starts" : cl.input, "starts", "must be between 1 and 100");
+  if (!cl.out.empty()) job.out_dir = cl.out;
+  if (job.out_dir.empty()) job.out_dir = "out/fit";
+  problem.settings.finite_differences = cl.finite_differences;
+  if (cl.single_level) problem.settings.coarse_first = false;
+
+  if (free.empty()) throw InputError(cl.input, "--free", "name the parameters to fit, e.g. --free material.yield_stress,material.n");
+  for (const auto& key : free) {
+    FreeParameter f;
+    f.parameter = parameter_or_fail(key, "--free");
+    const double start = value_of(problem.data.front().load_case.material, f.parameter);
+    std::tie(f.lower, f.upper) = default_bounds(f.parameter, start);
+    problem.free.push_back(f);
+  }
+  for (const auto& [key, range] : bounds) {
+    const MaterialParameter p = parameter_or_fail(key, bounds_source);
+    auto it = std::find_if(problem.free.begin(), problem.free.end(), [&](const FreeParameter& f) { return f.parameter == p; });
+    if (it == problem.free.end()) throw InputError(bounds_source, key, "has bounds but is not free");
+    it->lower = range.first;
+    it->upper = range.second;
+  }
+  // Data the case cannot produce, and fewer points than parameters, are refused before any run.
+  std::size_t points = 0;
+  for (const auto& d : problem.data) {
+    points += d.values.size();
+    if (d.kind == FitDataKind::force_depth_curve)
+      for (std::size_t i = 0; i < d.abscissa.size(); ++i)
+        if (d.abscissa[i] > d.load_case.max_depth() * (1.0 + 1e-12) || d.abscissa[i] < 0.0)
+          throw InputError(d.file, fmt::format("point {}", i + 1),
+                           fmt::format("depth {:.6g} m is outside the load case's depths [0, {:.6g}] m ({}): deepen "
+                                       "load.path",
+                                       d.abscissa[i], d.load_case.max_depth(), d.load_case.source));
+  }
+  if (points < problem.free.size())
+    throw InputError(problem.data.front().file, "data",
+                     fmt::format("{} point(s) for {} free parameter(s): at least as many points as parameters", points,
+                                 problem.free.size()));
+  return job;
+}
+
+nlohmann::json fit_json(const FitProblem& problem, const FitResult& r) {
+  using nlohmann::json;
+  const auto number = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
+  json j;
+  j["units"] = "SI: E, yield_stress in Pa; depths and radii in m; forces in N (N/m in plane strain)";
+  json parameters = json::object();
+  std::vector<std::string> order;
+  for (std::size_t k = 0; k < problem.free.size(); ++k) {
+    const auto& f = problem.free[k];
+    order.push_back(key_of(f.parameter));
+    parameters[key_of(f.parameter)] = {{"value", r.values[k]},
+                                       {"std_error", number(r.std_errors[k])},
+                                       {"lower", f.lower},
+                                       {"upper", f.upper},
+                                       {"start", value_of(problem.data.front().load_case.material, f.parameter)}};
+  }
+  j["parameters"] = parameters;
+  j["free"] = order;
+  json correlation = json::array(), covariance = json::array();
+  for (Eigen::Index a = 0; a < r.correlation.rows(); ++a) {
+    json row = json::array(), crow = json::array();
+    for (Eigen::Index b = 0; b < r.correlation.cols(); ++b) {
+      row.push_back(number(r.correlation(a, b)));
+      crow.push_back(number(r.covariance(a, b)));
+    }
+    correlation.push_back(row);
+    covariance.push_back(crow);
+  }
+  j["correlation"] = correlation;
+  j["covariance"] = covariance;
+  j["singular_values"] = r.singular_values;
+  j["condition_number"] = number(r.condition_number);
+  j["condition_limit"] = identifiability_condition_limit;
+  j["identifiable"] = r.identifiable;
+  j["weakest_direction"] = r.weakest_direction;
+  j["poorly_determined"] = r.poorly_determined.empty() ? json(nullptr) : json(r.poorly_determined);
+  j["rms_residual"] = {{"relative", r.rms_relative}};
+  json data = json::array();
+  for (std::size_t d = 0; d < problem.data.size(); ++d) {
+    const auto& in = problem.data[d];
+    const auto& out = r.data[d];
+    const bool curve = in.kind == FitDataKind::force_depth_curve;
+    data.push_back({{"file", in.file},
+                    {"case", in.load_case.source},
+                    {"kind", curve ? "force_depth_curve" : "imprint_profile"},
+                    {"points", in.values.size()},
+                    {"weight", in.weight},
+                    {"rms_residual", out.rms_residual},
+                    {"rms_residual_unit", curve ? (in.load_case.geometry.kind == SceneKind::plane_strain ? "N/m" : "N") : "m"},
+                    {"rms_relative", out.rms_relative},
+                    {"gradients", out.gradients},
+                    {"mesh_contact_half_width", out.contact_half_width_planned}});
+  }
+  j["data"] = data;
+  j["forward_runs"] = r.forward_runs;
+  j["coarse_runs"] = r.coarse_runs;
+  j["iterations"] = r.iterations;
+  j["wall_s"] = r.wall_seconds;
+  j["mesh_replanned"] = r.mesh_replanned;
+  json starts = json::array();
+  // Costs are comparable within a phase's meshes only: a coarse start's is on other meshes.
+  for (std::size_t k = 0; k < r.starts.size(); ++k) {
+    const StartOutcome& s = r.starts[k];
+    starts.push_back({{"start", s.start}, {"result", s.result}, {"cost", number(s.cost)}, {"iterations", s.iterations},
+                      {"converged", s.converged}, {"message", s.message}, {"phase", s.phase},
+                      {"selected", k == r.selected_start}});
+  }
+  j["starts"] = starts;
+  return j;
+}
+
+std::string fit_curves_csv(const FitProblem& problem, const FitResult& r) {
+  std::string out = "data_set,kind,x,data,model,residual\n";
+  for (std::size_t d = 0; d < problem.data.size(); ++d) {
+    const auto& in = problem.data[d];
+    const char* kind = in.kind == FitDataKind::force_depth_curve ? "curve" : "imprint";
+    for (std::size_t i = 0; i < in.values.size(); ++i)
+      out += fmt::format("{},{},{:.10g},{:.10g},{:.10g},{:.10g}\n", d + 1, kind, in.abscissa[i], in.values[i],
+                         r.data[d].model[i], r.data[d].model[i] - in.values[i]);
+  }
+  return out;
+}
+
+void write_fit_results(const std::filesystem::path& dir, const FitProblem& problem, const FitResult& result) {
+  std::filesystem::create_directories(dir);
+  write_file_atomically(dir / "fit.json", fit_json(problem, result).dump(2) + "\n");
+  write_file_atomically(dir / "fit_curves.csv", fit_curves_csv(problem, result));
+  for (std::size_t d = 0; d < result.data.size(); ++d)
+    write_file_atomically(dir / (d == 0 ? std::string("fitted_case.toml") : fmt::format("fitted_case_{}.toml", d + 1)),
+                          to_toml(result.data[d].fitted_case));
+}
+
+}  // namespace indentsim

@@ -1,0 +1,160 @@
+#include "indentsim/input/curve_csv.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <optional>
+#include <tuple>
+
+#include <fmt/format.h>
+
+#include "indentsim/input/csv_table.hpp"
+#include "indentsim/base/error.hpp"
+
+namespace indentsim {
+
+namespace {
+
+std::string trim(const std::string& text) { return trim_csv_field(text); }
+
+std::string lower(std::string text) {
+  for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return text;
+}
+
+/// "Depth (nm)" -> {"Depth", "nm"}; "Load [mN]" -> {"Load", "mN"}; "alpha" -> {"alpha", ""}.
+std::pair<std::string, std::string> name_and_unit(const std::string& field) {
+  const std::string f = trim(field);
+  if (!f.empty() && (f.back() == ')' || f.back() == ']')) {
+    const char open = f.back() == ')' ? '(' : '[';
+    const auto at = f.rfind(open);
+    if (at != std::string::npos) return {trim(f.substr(0, at)), trim(f.substr(at + 1, f.size() - at - 2))};
+  }
+  return {f, ""};
+}
+
+bool all_numbers(const std::vector<std::string>& row) {
+  double v = 0.0;
+  return !row.empty() && std::all_of(row.begin(), row.end(), [&](const std::string& f) { return parse_csv_number(f, v); });
+}
+
+std::string join_fields(const std::vector<std::string>& row) {
+  std::string out;
+  for (const auto& f : row) out += (out.empty() ? "\"" : ", \"") + printable(trim(f), 40) + "\"";
+  return out;
+}
+
+}  // namespace
+
+double depth_unit_factor(const std::string& unit) {
+  if (unit == "m") return 1.0;
+  if (unit == "mm") return 1e-3;
+  if (unit == "um" || unit == "µm" || unit == "μm") return 1e-6;
+  if (unit == "nm") return 1e-9;
+  return 0.0;
+}
+
+double force_unit_factor(const std::string& unit) {
+  if (unit == "N") return 1.0;
+  if (unit == "mN") return 1e-3;
+  if (unit == "uN" || unit == "µN" || unit == "μN") return 1e-6;
+  if (unit == "nN") return 1e-9;
+  return 0.0;
+}
+
+LoadDepthCurve read_curve_csv(const std::filesystem::path& file, const CurveColumns& columns) {
+  const std::string name = file.string();
+  const auto fail = [&](const std::string& key, const std::string& problem) {
+    throw InputError(name, key, problem);
+  };
+  const CsvTable table = read_csv_table(file, std::size_t{1} << 30, [&](const std::string& p) { fail("curve", p); });
+  const auto& rows = table.rows;
+  if (rows.empty()) fail("curve", "is empty");
+
+  // The header: the row naming both columns, or the last row before the first row of numbers.
+  const bool named = !columns.depth_column.empty() || !columns.force_column.empty();
+  if (named && (columns.depth_column.empty() || columns.force_column.empty()))
+    fail(columns.depth_column.empty() ? "curve.depth_column" : "curve.force_column",
+         "name both columns (curve.depth_column and curve.force_column), or neither for a two-column file");
+  const auto find_column = [&](const std::vector<std::string>& header, const std::string& wanted) -> std::optional<std::size_t> {
+    for (std::size_t c = 0; c < header.size(); ++c)
+      if (lower(trim(header[c])) == lower(trim(wanted)) || lower(name_and_unit(header[c]).first) == lower(trim(wanted)))
+        return c;
+    return std::nullopt;
+  };
+  std::optional<std::size_t> header_row;
+  std::size_t depth_col = 0, force_col = 1;
+  if (named) {
+    for (std::size_t k = 0; k < rows.size() && !header_row; ++k) {
+      const auto d = find_column(rows[k], columns.depth_column), f = find_column(rows[k], columns.force_column);
+      if (d && f) {
+        header_row = k;
+        depth_col = *d;
+        force_col = *f;
+      }
+    }
+    if (!header_row) {
+      const auto& first = rows.front();
+      fail(find_column(first, columns.depth_column) ? "curve.force_column" : "curve.depth_column",
+           fmt::format("no header row names both \"{}\" and \"{}\" (the first row holds {})",
+                       printable(columns.depth_column, 40), printable(columns.force_column, 40), join_fields(first)));
+    }
+  } else {
+    std::size_t first_numbers = 0;
+    while (first_numbers < rows.size() && !all_numbers(rows[first_numbers])) ++first_numbers;
+    if (first_numbers == rows.size()) fail("curve", "holds no row of numbers");
+    if (first_numbers > 0) header_row = first_numbers - 1;
+    if (rows[first_numbers].size() != 2)
+      fail("curve.depth_column",
+           fmt::format("has {} columns: name the depth and the force column (curve.depth_column and "
+                       "curve.force_column, or --depth-column and --force-column){}",
+                       rows[first_numbers].size(),
+                       header_row ? fmt::format("; the header holds {}", join_fields(rows[*header_row])) : ""));
+  }
+
+  // The units: given, or from the header.
+  LoadDepthCurve curve;
+  const auto unit_of = [&](const std::string& given, std::size_t column, const char* key, const char* what,
+                           double (*factor)(const std::string&), const char* accepted, const std::string& fallback) {
+    std::string unit = trim(given);
+    if (unit.empty() && header_row && column < rows[*header_row].size())
+      unit = name_and_unit(rows[*header_row][column]).second;
+    if (unit.empty()) unit = fallback;
+    if (unit.empty())
+      fail(key, fmt::format("the {} unit is missing: give {} ({}) or write it in the header, e.g. \"{} ({})\"",
+                            what, key, accepted, what, std::string(accepted).substr(0, std::string(accepted).find(','))));
+    if (factor(unit) == 0.0)
+      fail(key, fmt::format("\"{}\" is not a {} unit (accepted: {})", printable(unit, 20), what, accepted));
+    return unit;
+  };
+  curve.depth_unit = unit_of(columns.depth_unit, depth_col, "curve.depth_unit", "depth", depth_unit_factor,
+                             "nm, um, mm, m", columns.default_depth_unit);
+  curve.force_unit = unit_of(columns.force_unit, force_col, "curve.force_unit", "force", force_unit_factor,
+                             "mN, uN, nN, N", columns.default_force_unit);
+  const double depth_scale = depth_unit_factor(curve.depth_unit), force_scale = force_unit_factor(curve.force_unit);
+
+  // The numbers: every row after the header, both columns finite numbers.
+  const std::string depth_name = header_row ? printable(trim(rows[*header_row][depth_col]), 40) : "1";
+  const std::string force_name = header_row ? printable(trim(rows[*header_row][force_col]), 40) : "2";
+  for (std::size_t k = header_row ? *header_row + 1 : 0; k < rows.size(); ++k) {
+    const auto& row = rows[k];
+    if (row.size() == 1 && trim(row[0]).empty()) continue;
+    double h = 0.0, P = 0.0;
+    for (const auto& [col, column_name, value] :
+         {std::tuple{depth_col, depth_name, &h}, std::tuple{force_col, force_name, &P}}) {
+      if (col >= row.size())
+        fail(fmt::format("row {}", k + 1),
+             fmt::format("has {} fields; column \"{}\" is missing", row.size(), column_name));
+      if (!parse_csv_number(row[col], *value))
+        fail(fmt::format("row {}", k + 1), fmt::format("column \"{}\": \"{}\" is not a finite number", column_name,
+                                                       printable(trim(row[col]), 40)));
+    }
+    curve.depth.push_back(h * depth_scale);
+    curve.force.push_back(P * force_scale);
+    curve.rows.push_back(k + 1);
+  }
+  if (curve.depth.size() < 2)
+    fail("curve", fmt::format("holds {} point{} of depth and force", curve.depth.size(), curve.depth.size() == 1 ? "" : "s"));
+  return curve;
+}
+
+}  // namespace indentsim

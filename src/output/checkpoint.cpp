@@ -1,0 +1,516 @@
+#include "indentsim/output/checkpoint.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <csignal>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <optional>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "indentsim/base/error.hpp"
+#include "indentsim/base/file_system.hpp"
+
+namespace indentsim {
+
+namespace {
+
+constexpr char magic[8] = {'I', 'N', 'D', 'S', 'I', 'M', 'C', 'K'};
+constexpr std::size_t header_size = sizeof(magic) + sizeof(std::uint32_t) + sizeof(std::uint64_t);
+
+class ByteWriter {
+public:
+  template <class T>
+  void put(const T& value) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    const auto* p = reinterpret_cast<const char*>(&value);
+    bytes_.append(p, sizeof(T));
+  }
+  void put_string(const std::string& s) {
+    put<std::uint64_t>(s.size());
+    bytes_.append(s);
+  }
+  template <class T>
+  void put_vector(const std::vector<T>& v) {
+    put<std::uint64_t>(v.size());
+    if (!v.empty()) bytes_.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+  }
+  std::string& bytes() { return bytes_; }
+
+private:
+  std::string bytes_;
+};
+
+// Every read checks what is left, so a damaged file can only fail cleanly.
+class ByteReader {
+public:
+  ByteReader(const char* data, std::size_t size, const std::string& source) : p_(data), left_(size), source_(source) {}
+
+  template <class T>
+  T get(const char* what) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    need(sizeof(T), what);
+    T value;
+    std::memcpy(&value, p_, sizeof(T));
+    advance(sizeof(T));
+    return value;
+  }
+  std::string get_string(const char* what) {
+    const auto n = get<std::uint64_t>(what);
+    need_elements(n, 1, what);
+    std::string s(p_, static_cast<std::size_t>(n));
+    advance(static_cast<std::size_t>(n));
+    return s;
+  }
+  template <class T>
+  std::vector<T> get_vector(const char* what) {
+    const auto n = get<std::uint64_t>(what);
+    need_elements(n, sizeof(T), what);
+    std::vector<T> v(static_cast<std::size_t>(n));
+    if (n) std::memcpy(v.data(), p_, static_cast<std::size_t>(n) * sizeof(T));
+    advance(static_cast<std::size_t>(n) * sizeof(T));
+    return v;
+  }
+  std::size_t left() const { return left_; }
+  [[noreturn]] void fail(const std::string& problem) const { throw InputError(source_, "checkpoint", problem); }
+
+private:
+  void need(std::size_t n, const char* what) const {
+    if (n > left_) fail(fmt::format("ends inside {} (truncated or damaged)", what));
+  }
+  void need_elements(std::uint64_t count, std::size_t size, const char* what) const {
+    if (count > left_ / size) fail(fmt::format("{} claims {} entries, more than the file holds", what, count));
+  }
+  void advance(std::size_t n) {
+    p_ += n;
+    left_ -= n;
+  }
+  const char* p_;
+  std::size_t left_;
+  std::string source_;
+};
+
+void write_record(ByteWriter& w, const IncrementRecord& r) {
+  w.put<std::int32_t>(r.step);
+  w.put(r.alpha);
+  w.put(r.force);
+  w.put(r.half_width);
+  w.put<std::int32_t>(r.contact_nodes);
+  w.put<std::int64_t>(r.newton_iterations);
+  w.put<std::int64_t>(r.factorizations);
+  w.put<std::int32_t>(r.cutbacks);
+  w.put<std::int64_t>(r.plastic_points);
+  w.put(r.max_strain_intensity);
+  w.put(r.wall_seconds);
+}
+
+IncrementRecord read_record(ByteReader& in) {
+  IncrementRecord r;
+  r.step = in.get<std::int32_t>("a curve row");
+  r.alpha = in.get<double>("a curve row");
+  r.force = in.get<double>("a curve row");
+  r.half_width = in.get<double>("a curve row");
+  r.contact_nodes = in.get<std::int32_t>("a curve row");
+  r.newton_iterations = in.get<std::int64_t>("a curve row");
+  r.factorizations = in.get<std::int64_t>("a curve row");
+  r.cutbacks = in.get<std::int32_t>("a curve row");
+  r.plastic_points = in.get<std::int64_t>("a curve row");
+  r.max_strain_intensity = in.get<double>("a curve row");
+  r.wall_seconds = in.get<double>("a curve row");
+  return r;
+}
+
+/// The content of a checkpoint whose checksum holds (it may have been recomputed after an edit):
+/// every number finite, the curve a run's curve (steps 0, 1, 2, ..., starting unloaded), and the
+/// state at the curve's last row.  What needs the mesh and the load path is checked in resume_from.
+void check_content(const Checkpoint& c, const ByteReader& in) {
+  const SimulationState& s = c.state;
+  const auto finite = [](const std::vector<double>& v) {
+    return std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); });
+  };
+  if (!std::isfinite(s.alpha) || !std::isfinite(s.alpha_previous) || !std::isfinite(s.deepest) ||
+      !std::isfinite(c.planned_contact_half_width))
+    in.fail("its state holds a number that is not finite");
+  if (!finite(s.u) || !finite(s.u_previous) || !finite(s.history)) in.fail("its displacement or material history holds "
+                                                                          "a number that is not finite");
+  if (!finite(c.mesh_x) || !finite(c.mesh_y) || !finite(c.free_surface_depths))
+    in.fail("its mesh or summary data hold a number that is not finite");
+  if (c.curve.empty()) in.fail("holds no curve row");
+  double deepest = 0.0;
+  for (std::size_t k = 0; k < c.curve.size(); ++k) {
+    const IncrementRecord& r = c.curve[k];
+    if (r.step != static_cast<int>(k)) in.fail(fmt::format("its curve row {} is numbered {}", k, r.step));
+    if (!std::isfinite(r.alpha) || !std::isfinite(r.force) || !std::isfinite(r.half_width) ||
+        !std::isfinite(r.max_strain_intensity) || !std::isfinite(r.wall_seconds))
+      in.fail(fmt::format("its curve row {} holds a number that is not finite", k));
+    if (r.alpha < 0.0 || r.force < 0.0 || r.half_width < 0.0 || r.contact_nodes < 0 || r.newton_iterations < 0 ||
+        r.factorizations < 0 || r.cutbacks < 0 || r.plastic_points < 0)
+      in.fail(fmt::format("its curve row {} holds a negative depth, force or count", k));
+    deepest = std::max(deepest, r.alpha);
+  }
+  if (c.curve.front().alpha != 0.0) in.fail("its curve does not start unloaded (alpha = 0)");
+  if (c.curve.back().alpha != s.alpha || deepest != s.deepest)
+    in.fail("its curve and its state disagree on the depth reached");
+  if (s.u.size() > 2 * c.mesh_x.size() * c.mesh_y.size() || (s.has_previous && s.u_previous.size() != s.u.size()) ||
+      s.in_contact.size() > c.mesh_x.size())
+    in.fail("its state does not fit its mesh");
+  const NearField& near = s.near_field;
+  if (near.condensed &&
+      (near.contact_nodes < 1 || near.contact_nodes > static_cast<int>(c.mesh_x.size()) || near.elements_x < 0 ||
+       near.elements_x >= static_cast<int>(c.mesh_x.size()) || near.elements_y < 0 ||
+       near.elements_y >= static_cast<int>(c.mesh_y.size())))
+    in.fail("its near field does not fit its mesh");
+}
+
+}  // namespace
+
+std::uint64_t fnv1a(const void* data, std::size_t size, std::uint64_t hash) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  for (std::size_t i = 0; i < size; ++i) {
+    hash ^= p[i];
+    hash *= 0x100000001b3ull;
+  }
+  return hash;
+}
+
+std::string serialize(const Checkpoint& c) {
+  ByteWriter payload;
+  payload.put_string(c.load_case_toml);
+  payload.put<std::uint64_t>(fnv1a(c.load_case_toml.data(), c.load_case_toml.size()));
+  payload.put(c.planned_contact_half_width);
+  payload.put_vector(c.mesh_x);
+  payload.put_vector(c.mesh_y);
+  const SimulationState& s = c.state;
+  payload.put(s.alpha);
+  payload.put(s.alpha_previous);
+  payload.put(s.deepest);
+  payload.put<std::uint8_t>(s.has_previous);
+  payload.put<std::int32_t>(s.rows);
+  payload.put<std::uint64_t>(s.next_target);
+  payload.put<std::uint8_t>(s.warned_fine_zone);
+  payload.put<std::uint64_t>(s.warnings.size());
+  for (const auto& w : s.warnings) payload.put_string(w);
+  payload.put_vector(s.u);
+  payload.put_vector(s.u_previous);
+  payload.put_vector(s.history);
+  payload.put_vector(s.in_contact);
+  payload.put<std::uint8_t>(s.near_field.condensed);
+  payload.put<std::int32_t>(s.near_field.contact_nodes);
+  payload.put<std::int32_t>(s.near_field.elements_x);
+  payload.put<std::int32_t>(s.near_field.elements_y);
+  payload.put_vector(s.plastic_zone_growth.depths);
+  std::vector<double> widths, depths;
+  for (const auto& e : s.plastic_zone_growth.extents) {
+    widths.push_back(e.width);
+    depths.push_back(e.depth);
+  }
+  payload.put_vector(widths);
+  payload.put_vector(depths);
+  payload.put<std::uint64_t>(c.curve.size());
+  for (const auto& r : c.curve) write_record(payload, r);
+  payload.put_vector(c.free_surface_depths);
+
+  ByteWriter file;
+  file.bytes().append(magic, sizeof(magic));
+  file.put<std::uint32_t>(checkpoint_format_version);
+  file.put<std::uint64_t>(payload.bytes().size());
+  file.bytes().append(payload.bytes());
+  file.put<std::uint64_t>(fnv1a(file.bytes().data(), file.bytes().size()));
+  return std::move(file.bytes());
+}
+
+Checkpoint deserialize(const std::string& bytes, const std::string& source) {
+  const auto fail = [&](const std::string& problem) { throw InputError(source, "checkpoint", problem); };
+  if (bytes.size() < header_size + sizeof(std::uint64_t))
+    fail(fmt::format("is {} bytes long, too short to be a checkpoint", bytes.size()));
+  if (std::memcmp(bytes.data(), magic, sizeof(magic)) != 0) fail("is not an indentsim checkpoint (bad magic bytes)");
+  std::uint32_t version;
+  std::memcpy(&version, bytes.data() + sizeof(magic), sizeof(version));
+  if (version != checkpoint_format_version)
+    fail(fmt::format("was written in checkpoint format {}; this indentsim reads format {}", version,
+                     checkpoint_format_version));
+  std::uint64_t length;
+  std::memcpy(&length, bytes.data() + sizeof(magic) + sizeof(version), sizeof(length));
+  if (length != bytes.size() - header_size - sizeof(std::uint64_t))
+    fail(fmt::format("holds {} bytes of data where its header promises {} (truncated or damaged)",
+                     bytes.size() - std::min(bytes.size(), header_size + sizeof(std::uint64_t)), length));
+  std::uint64_t stored;
+  std::memcpy(&stored, bytes.data() + bytes.size() - sizeof(stored), sizeof(stored));
+  if (stored != fnv1a(bytes.data(), bytes.size() - sizeof(stored)))
+    fail("fails its checksum (the file is damaged)");
+
+  ByteReader in(bytes.data() + header_size, static_cast<std::size_t>(length), source);
+  Checkpoint c;
+  c.load_case_toml = in.get_string("the load case");
+  if (in.get<std::uint64_t>("the load case hash") != fnv1a(c.load_case_toml.data(), c.load_case_toml.size()))
+    in.fail("its load case does not match the load case hash");
+  c.planned_contact_half_width = in.get<double>("the mesh plan");
+  c.mesh_x = in.get_vector<double>("the mesh");
+  c.mesh_y = in.get_vector<double>("the mesh");
+  SimulationState& s = c.state;
+  s.alpha = in.get<double>("the state");
+  s.alpha_previous = in.get<double>("the state");
+  s.deepest = in.get<double>("the state");
+  s.has_previous = in.get<std::uint8_t>("the state") != 0;
+  s.rows = in.get<std::int32_t>("the state");
+  s.next_target = in.get<std::uint64_t>("the state");
+  s.warned_fine_zone = in.get<std::uint8_t>("the state") != 0;
+  const auto warnings = in.get<std::uint64_t>("the warnings");
+  if (warnings > in.left()) in.fail("claims more warnings than the file holds");
+  for (std::uint64_t k = 0; k < warnings; ++k) s.warnings.push_back(in.get_string("a warning"));
+  s.u = in.get_vector<double>("the displacement");
+  s.u_previous = in.get_vector<double>("the previous displacement");
+  s.history = in.get_vector<double>("the material history");
+  s.in_contact = in.get_vector<char>("the contact set");
+  s.near_field.condensed = in.get<std::uint8_t>("the near field") != 0;
+  s.near_field.contact_nodes = in.get<std::int32_t>("the near field");
+  s.near_field.elements_x = in.get<std::int32_t>("the near field");
+  s.near_field.elements_y = in.get<std::int32_t>("the near field");
+  s.plastic_zone_growth.depths = in.get_vector<double>("the plastic zone growth");
+  const auto widths = in.get_vector<double>("the plastic zone growth");
+  const auto depths = in.get_vector<double>("the plastic zone growth");
+  if (widths.size() != depths.size() || widths.size() != s.plastic_zone_growth.depths.size())
+    in.fail("its plastic zone growth has lists of different lengths");
+  for (std::size_t k = 0; k < widths.size(); ++k) s.plastic_zone_growth.extents.push_back({widths[k], depths[k]});
+  const auto rows = in.get<std::uint64_t>("the curve");
+  if (rows > in.left()) in.fail("claims more curve rows than the file holds");
+  for (std::uint64_t k = 0; k < rows; ++k) c.curve.push_back(read_record(in));
+  c.free_surface_depths = in.get_vector<double>("the summary data");
+  if (in.left() != 0) in.fail(fmt::format("has {} unexplained bytes at its end", in.left()));
+  if (c.free_surface_depths.size() != c.curve.size() || s.rows != static_cast<int>(c.curve.size()) ||
+      s.next_target != c.curve.size())
+    in.fail("its curve, summary and state disagree on the number of increments");
+  check_content(c, in);
+  return c;
+}
+
+void write_checkpoint(const std::filesystem::path& file, const Checkpoint& checkpoint) {
+  const std::string bytes = serialize(checkpoint);
+  const std::filesystem::path temporary = file.string() + ".tmp";
+  const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) throw_io_error(temporary, "creating", errno);
+  try {
+    const std::size_t half = bytes.size() / 2;
+    write_all(fd, bytes.data(), half, temporary);
+    inject_fault("checkpoint");  // robustness tests: die mid-write
+    write_all(fd, bytes.data() + half, bytes.size() - half, temporary);
+    if (::fsync(fd) != 0) throw_io_error(temporary, "flushing (fsync)", errno);
+  } catch (...) {
+    ::close(fd);
+    ::unlink(temporary.c_str());  // the previous checkpoints stay as they were
+    throw;
+  }
+  ::close(fd);
+  if (::rename(temporary.c_str(), file.c_str()) != 0) {
+    const int error = errno;
+    ::unlink(temporary.c_str());
+    throw_io_error(file, "renaming a temporary file to", error);
+  }
+  // Make the rename itself durable.
+  const int dir = ::open(file.parent_path().empty() ? "." : file.parent_path().c_str(), O_RDONLY | O_CLOEXEC);
+  if (dir >= 0) {
+    ::fsync(dir);
+    ::close(dir);
+  }
+}
+
+Checkpoint read_checkpoint(const std::filesystem::path& file) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(file, ec))
+    throw InputError(file.string(), "checkpoint", "is not a readable file");
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw InputError(file.string(), "checkpoint", "cannot be opened");
+  std::ostringstream bytes;
+  bytes << in.rdbuf();
+  return deserialize(bytes.str(), file.string());
+}
+
+CheckpointSchedule CheckpointSchedule::of(const LoadCase& load_case) {
+  CheckpointSchedule schedule;
+  schedule.every = load_case.output.checkpoint_every;
+  schedule.keep = load_case.output.keep_checkpoints;
+  const std::vector<int> reversals = reversal_steps(plan_increments(load_case.load));
+  schedule.waypoint_steps.insert(reversals.begin(), reversals.end());
+  return schedule;
+}
+
+bool CheckpointSchedule::due(int step) const {
+  if (step <= 0) return false;
+  return (every > 0 && step % every == 0) || waypoint_steps.count(step) > 0;
+}
+
+std::filesystem::path save_checkpoint(const std::filesystem::path& dir, const Checkpoint& checkpoint,
+                                      const CheckpointSchedule& schedule) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw_io_error(dir, "creating the folder", ec.value());
+  const int step = checkpoint.curve.empty() ? 0 : checkpoint.curve.back().step;
+  const std::filesystem::path file = dir / fmt::format("checkpoint_{:06d}.ck", step);
+  write_checkpoint(file, checkpoint);
+  // Keep the newest `keep` (all when keep = 0) and every waypoint's; remove the others and any
+  // temporary file a killed write left.
+  std::vector<std::pair<int, std::filesystem::path>> existing;
+  for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
+    const auto& p = entry.path();
+    const std::string name = p.filename().string();
+    if (p.extension() == ".ck" && name.rfind("checkpoint_", 0) == 0) {
+      const std::string digits = p.stem().string().substr(11);
+      if (!digits.empty() && digits.size() <= 9 && digits.find_first_not_of("0123456789") == std::string::npos)
+        existing.emplace_back(std::stoi(digits), p);
+    } else if (p.extension() == ".tmp") {
+      std::filesystem::remove(p, ec);
+    }
+  }
+  if (schedule.keep <= 0) return file;
+  std::sort(existing.begin(), existing.end());
+  for (std::size_t k = 0; k + static_cast<std::size_t>(schedule.keep) < existing.size(); ++k)
+    if (!schedule.waypoint_steps.count(existing[k].first)) std::filesystem::remove(existing[k].second, ec);
+  return file;
+}
+
+bool same_run(const LoadCase& a, const LoadCase& b) {
+  return first_physics_difference(a, b).empty() && a.load.path == b.load.path &&
+         a.load.increments == b.load.increments && a.load.segment_increments == b.load.segment_increments;
+}
+
+namespace {
+
+/// The folder holding the checkpoint files, and the run folder whose case.toml names the run.
+std::pair<std::filesystem::path, std::filesystem::path> checkpoint_folders(const std::filesystem::path& folder) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(folder / "checkpoints", ec)) return {folder / "checkpoints", folder};
+  return {folder, folder.has_filename() ? folder.parent_path() : folder.parent_path().parent_path()};
+}
+
+}  // namespace
+
+std::vector<CheckpointListing> list_checkpoints(const std::filesystem::path& folder) {
+  const auto [checkpoints, run_dir] = checkpoint_folders(folder);
+  std::optional<LoadCase> own;
+  std::error_code ec;
+  if (std::filesystem::is_regular_file(run_dir / "case.toml", ec)) {
+    try {
+      own = read_load_case(run_dir / "case.toml");
+    } catch (const InputError&) {
+      // An unreadable case.toml names no run: every checkpoint is judged by itself.
+    }
+  }
+  std::vector<CheckpointListing> listing;
+  for (const auto& entry : std::filesystem::directory_iterator(checkpoints, ec)) {
+    const auto& p = entry.path();
+    const std::string name = p.filename().string();
+    if (p.extension() != ".ck" || name.rfind("checkpoint_", 0) != 0) continue;
+    CheckpointListing item;
+    item.file = p;
+    try {
+      const Checkpoint c = read_checkpoint(p);
+      item.load_case = parse_load_case(c.load_case_toml, p.string());
+      const LoadCase& lc = item.load_case;
+      item.step = c.curve.back().step;
+      item.alpha = c.curve.back().alpha;
+      item.force = c.curve.back().force;
+      const std::vector<int> reversals = reversal_steps(plan_increments(lc.load));
+      item.reversal = std::find(reversals.begin(), reversals.end(), item.step) != reversals.end();
+      item.of_the_folders_run = !own || same_run(*own, lc);
+    } catch (const InputError& e) {
+      item.problem = e.problem();
+    }
+    listing.push_back(item);
+  }
+  std::sort(listing.begin(), listing.end(),
+            [](const CheckpointListing& a, const CheckpointListing& b) { return a.step < b.step; });
+  return listing;
+}
+
+std::filesystem::path choose_checkpoint(const std::filesystem::path& argument) {
+  std::error_code ec;
+  if (!std::filesystem::is_directory(argument, ec)) return argument;
+  const std::vector<CheckpointListing> listing = list_checkpoints(argument);
+  std::vector<CheckpointListing> usable;
+  for (const auto& item : listing)
+    if (item.problem.empty() && item.of_the_folders_run) usable.push_back(item);
+  if (usable.empty())
+    throw InputError(argument.string(), "checkpoint",
+                     listing.empty() ? "is a folder without checkpoint_*.ck files"
+                                     : fmt::format("holds no resumable checkpoint of its own run ({} checkpoint(s) "
+                                                   "damaged or of another run; see indentsim resume {} --list)",
+                                                   listing.size(), argument.string()));
+  // Without a case.toml, checkpoints of different runs cannot be told apart: refuse to guess.
+  for (const auto& item : usable)
+    if (!same_run(usable.front().load_case, item.load_case))
+      throw InputError(argument.string(), "checkpoint",
+                       fmt::format("holds checkpoints of different runs ({} and {}) and no case.toml to tell which "
+                                   "is the folder's: name the checkpoint file",
+                                   usable.front().file.filename().string(), item.file.filename().string()));
+  return usable.back().file;
+}
+
+Checkpoint make_checkpoint(const Simulation& sim, const std::vector<IncrementRecord>& curve,
+                           const std::vector<double>& free_surface_depths) {
+  Checkpoint c;
+  c.load_case_toml = to_toml(sim.load_case());
+  c.planned_contact_half_width = sim.plan().contact_half_width_estimate;
+  c.mesh_x = sim.mesh().x();
+  c.mesh_y = sim.mesh().y();
+  c.state = sim.state();
+  c.curve = curve;
+  c.free_surface_depths = free_surface_depths;
+  return c;
+}
+
+ResumedRun resume_from(const Checkpoint& c, const std::string& source, const std::vector<std::string>& overrides) {
+  const auto fail = [&](const std::string& problem) { throw InputError(source, "checkpoint", problem); };
+  LoadCase stored;
+  try {
+    stored = parse_load_case(c.load_case_toml, source);
+  } catch (const InputError& e) {
+    fail("its load case is not valid: " + e.key() + ": " + e.problem());
+  }
+  ResumedRun run;
+  run.load_case = parse_load_case(c.load_case_toml, source, overrides);
+  if (const std::string key = first_physics_difference(stored, run.load_case); !key.empty())
+    throw InputError(source, key, "cannot change when resuming: the checkpointed history depends on it");
+
+  // The new load path must pass through the history already computed.
+  const std::vector<double> before = plan_increments(stored.load), after = plan_increments(run.load_case.load);
+  const std::size_t done = static_cast<std::size_t>(c.state.next_target);
+  if (done == 0 || done > before.size()) fail("its state does not fit its own load path");
+  if (after.size() < done || !std::equal(before.begin(), before.begin() + static_cast<std::ptrdiff_t>(done), after.begin()))
+    throw InputError(source, "load.path",
+                     fmt::format("must follow the checkpointed history for its first {} increments (up to alpha = "
+                                 "{:.6g} m): keep the path's waypoints and increments up to there",
+                                 done - 1, before[done - 1]));
+  if (!(c.planned_contact_half_width > 0.0)) fail("holds no valid mesh plan");
+  for (std::size_t k = 0; k < done; ++k)
+    if (c.curve[k].alpha != before[k]) fail(fmt::format("its curve row {} is not at the depth its load path plans", k));
+  // The run continues on the near field it had (bit for bit), unless --set asks for the whole mesh.
+  SimulationState state = c.state;
+  if (run.load_case.solver.far_field == FarFieldChoice::full) state.near_field = NearField{};
+  run.simulation = std::make_unique<Simulation>(run.load_case, c.planned_contact_half_width, state.near_field);
+  if (run.simulation->mesh().x() != c.mesh_x || run.simulation->mesh().y() != c.mesh_y)
+    fail("its mesh does not match the mesh its load case gives (written by another version of indentsim?)");
+  try {
+    run.simulation->restore(state);
+  } catch (const std::invalid_argument& e) {
+    fail(std::string("its state does not fit its load case: ") + e.what());
+  }
+  // The curve's last row must be what the state gives: the force and the contact set follow from
+  // the displacement.
+  const ContactResult contact = run.simulation->contact();
+  const IncrementRecord& last = c.curve.back();
+  double largest = 0.0;
+  for (const auto& r : c.curve) largest = std::max(largest, r.force);
+  if (std::abs(contact.force - last.force) > 1e-9 * largest || contact.contact_nodes != last.contact_nodes)
+    fail(fmt::format("its last curve row (P = {:.10g}, {} contact nodes) is not what its state gives (P = {:.10g}, "
+                     "{} contact nodes)",
+                     last.force, last.contact_nodes, contact.force, contact.contact_nodes));
+  return run;
+}
+
+}  // namespace indentsim
