@@ -96,7 +96,7 @@ int main(int argc, char** argv) {
       {"axi_elastic_sphere", "axisymmetric/elastic_sphere.toml", {}},
       // Loading only: the shipped cases also unload.
       {"axi_steel_sphere", "axisymmetric/steel_sphere.toml", {"load.path=[0.0, 10e-6]"}, 20},
-      // Ilyushin's law: J2 under a sharp cone carries a sawtooth of about 2 dx / a (README, "Kick's
+      // Ilyushin's law: J2 under a sharp cone carries a sawtooth of about 2 dx / a (docs/verification.md, "Kick's
       // law") that no Richardson extrapolation can see through.
       {"axi_cone", "axisymmetric/berkovich_cone.toml", {"load.path=[0.0, 1e-6]", "material.model=\"ilyushin\""}},
   };

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """How the hardness of a steel depends on its yield stress and hardening: a notebook-style study.
 
-Set up once (README, "Python"):   export PYTHONPATH=$PWD/build/python
+Set up once (docs/user-guide.md, "Python"):   export PYTHONPATH=$PWD/build/python
 Run from the project root:        /usr/bin/python3 examples/hardness_study.py [--out out/hardness_study]
 
 1. Three runs side by side in Python threads (the solve releases the GIL), their curves as NumPy

@@ -133,7 +133,7 @@ TEST(Fit, ConeLoadingCurveAloneCannotSeparateYieldStressFromHardening) {
 
 TEST(Fit, LoadUnloadCurveGivesModulusAndYieldStressWithFewerRunsThanFiniteDifferences) {
   // E from the unloading (through Ilyushin's unloading branch), sigma_y from the loading (with n
-  // free too, a sphere's single curve holds sigma_y and n only to 5-10% at this noise: README);
+  // free too, a sphere's single curve holds sigma_y and n only to 5-10% at this noise: docs/verification.md);
   // 12 contact nodes, so the coarse phase runs on 6.  Sensitivities give every run its Jacobian:
   // one run per Levenberg-Marquardt step; finite differences need p + 1.
   LoadCase truth = sphere(SceneKind::axisymmetric);

@@ -141,7 +141,7 @@ double pile_up_ratio(const std::string& name, double n, const std::vector<std::s
 TEST(IndentationAnalysis, PileUpForLittleHardeningSinkInForStrongHardening) {
   // With little hardening the material piles up around the indenter (true area > Oliver-Pharr's,
   // which assumes sink-in), with strong hardening it sinks in (Bolshakov and Pharr 1998; Taljat
-  // and Pharr 2004).  The pile-up needs the mesh: the ratios grow with refinement (README); the
+  // and Pharr 2004).  The pile-up needs the mesh: the ratios grow with refinement (docs/verification.md); the
   // default resolution, 20 contact nodes; the trend, not the figure, is asserted.
   // A J2 steel-like sphere (E / sigma_y = 420) at h / R = 0.02, n = 0.05 and 0.45.
   const std::vector<std::string> sphere{"load.path=[0.0, 10e-6, 8.5e-6, 0.0]", "load.increments=[10, 8, 1]"};

@@ -127,7 +127,7 @@ INSTANTIATE_TEST_SUITE_P(Models, PlasticHistory, ::testing::Values("ilyushin", "
 
 TEST(LoadHistory, J2AndIlyushinAgreeBeforeTheyDiverge) {
   // On indentation the strain path under the punch is not proportional, so the two models
-  // differ; at the first yield they still agree closely (documented in the README).
+  // differ; at the first yield they still agree closely (docs/user-guide.md, "The two plastic models").
   const History ilyushin = run_history("ilyushin", "[0, 5e-5]", "5");
   const History j2 = run_history("j2", "[0, 5e-5]", "5");
   const double first = std::abs(j2.curve[1].force - ilyushin.curve[1].force) / ilyushin.curve[1].force;

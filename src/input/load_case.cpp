@@ -425,7 +425,7 @@ LoadCase from_table(const toml::table& root, const std::string& source, const st
   check_punch_keys(r, lc);
   // A cone has no length scale: its contact edge sweeps the whole contact zone node by node, and
   // under a plastic material the edge carries the full hardness, so the node-by-node engagement is
-  // a first-order error.  30 elements hold Kick's law P/h^2 = const to 0.34% (README, "Kick's law").
+  // a first-order error.  30 elements hold Kick's law P/h^2 = const to 0.34% (docs/verification.md, "Kick's law on a cone").
   if (lc.punch.shape == PunchShapeKind::cone && !r.find("mesh", "contact_nodes"))
     lc.mesh.contact_nodes = cone_contact_nodes;
   validate(lc);

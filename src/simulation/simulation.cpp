@@ -156,7 +156,7 @@ std::vector<std::string> plausibility_warnings(const LoadCase& lc, const MeshPla
   // and depths small against the punch's size.
   if (auto slope = make_punch(lc.punch)->slope_warning(lc.max_depth())) warnings.push_back(*slope);
   // A contact that is not small against the specimen: its edges and base shape P well beyond the
-  // discretization error (README, "Choosing the specimen").
+  // discretization error (docs/user-guide.md, "Choosing the specimen").
   const double a = plan.contact_half_width_estimate;
   for (const auto& [key, size] : {std::pair<const char*, double>{"geometry.lx", lc.geometry.lx}, {"geometry.ly", lc.geometry.ly}})
     if (a > max_relative_contact * size)

@@ -15,7 +15,7 @@
 //    change of the weakest combination moves the curves by less than about 0.1% -- below the
 //    model's own discretization error at the default mesh -- so no data the model is compared
 //    with can pin it (measured: a sharp cone's loading curve, sigma_y with n: about 270; a
-//    sphere's: 30; a sphere and a cone together: 11-13; README).
+//    sphere's: 30; a sphere and a cone together: 11-13; docs/verification.md).
 
 #include <functional>
 #include <string>

@@ -8,7 +8,7 @@
 // the classical a posteriori estimate of a mesh sequence (Richardson 1911; Roache, Verification
 // and Validation in Computational Science and Engineering, 1998, ch. 5).  The companion run is
 // the same case on the same plan (the main run's planned contact width, no pilot) with half the
-// contact nodes: about an eighth of the work of the run itself (9-15% measured, README).
+// contact nodes: about an eighth of the work of the run itself (9-15% measured, docs/performance.md).
 //
 // The orders: P converges at p = 2 (the work-precision study measures 1.6-2.3 on the shipped
 // cases; an estimate with p = 2 stays within a factor 1.5 of the truth for any p in [1.6, 2.6]);
