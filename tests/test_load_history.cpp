@@ -71,7 +71,7 @@ class PlasticHistory : public ::testing::TestWithParam<std::string> {};
 TEST_P(PlasticHistory, UnloadingLeavesAnImprintAndIsSteeperThanLoading) {
   const History h = run_history(GetParam(), "[0, 5e-5, 0]", "[8, 8]");
   ASSERT_EQ(h.summary.unloadings().size(), 1u);
-  const auto& u = h.summary.unloadings()[0];
+  const auto u = h.summary.unloadings()[0];
   EXPECT_TRUE(u.separated);
   EXPECT_GT(u.residual_depth, 0.1 * u.depth);  // a real imprint, not round-off
   EXPECT_LT(u.residual_depth, u.depth);

@@ -123,25 +123,6 @@ PowerLawFit fit_unloading(const std::vector<double>& depth, const std::vector<do
   return fit;
 }
 
-std::vector<CurveBranch> unloading_branches(const std::vector<double>& depth) {
-  std::vector<CurveBranch> branches;
-  std::size_t loading_start = 0;
-  std::size_t i = 0;
-  const std::size_t n = depth.size();
-  while (i + 1 < n) {
-    if (depth[i + 1] < depth[i] && (i == 0 || depth[i] > depth[i - 1])) {
-      CurveBranch b{loading_start, i, i};
-      while (b.end + 1 < n && depth[b.end + 1] < depth[b.end]) ++b.end;
-      if (b.peak > loading_start) branches.push_back(b);
-      loading_start = b.end;
-      i = b.end;
-    } else {
-      ++i;
-    }
-  }
-  return branches;
-}
-
 std::vector<CurveBranch> measured_unloading_branches(const std::vector<double>& depth, const std::vector<double>& force,
                                                      const AnalysisInput& settings,
                                                      const std::vector<std::size_t>& rows) {
@@ -321,12 +302,6 @@ nlohmann::ordered_json analysis_units(SceneKind scene) {
           {"stress", "Pa"},
           {"work", "J/m"},
           {"B", "N/m per m^m"}};
-}
-
-std::string to_json(const BranchAnalysis& a, const AnalysisContext& context, const std::string& indent) {
-  std::string text;
-  for (char c : branch_json(a, context).dump(2)) text += c == '\n' ? "\n" + indent : std::string(1, c);
-  return text;
 }
 
 }  // namespace indentsim

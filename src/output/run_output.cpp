@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include "indentsim/geometry/punch.hpp"
 #include "indentsim/simulation/simulation.hpp"
@@ -13,38 +14,37 @@ namespace indentsim {
 
 namespace {
 
-/// A JSON string literal of `text` (quotes, backslashes and control characters escaped).
-std::string json_string(const std::string& text) {
-  std::string out = "\"";
-  for (unsigned char c : text) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += static_cast<char>(c);
-    } else if (c < 0x20) {
-      out += fmt::format("\\u{:04x}", c);
-    } else {
-      out += static_cast<char>(c);
-    }
-  }
-  return out + "\"";
+/// `x` to `digits` significant digits: summary.json states error estimates and orders no finer
+/// than they are known (the value a reader parses is the rounded one).
+double significant(double x, int digits) {
+  if (!std::isfinite(x) || x == 0.0) return x;
+  return std::stod(fmt::format("{:.{}e}", x, digits - 1));
 }
 
+/// A measured time in seconds to the microsecond, a ratio of times to 1e-4: what a clock can say.
+double seconds(double t) { return std::round(t * 1e6) / 1e6; }
+double ratio(double r) { return std::round(r * 1e4) / 1e4; }
+
 /// What summary.json says of the run besides its results: who wrote it, the units, the material.
-std::string run_fields(const LoadCase& lc) {
+nlohmann::ordered_json run_fields(const LoadCase& lc) {
   const auto& m = lc.material;
   const bool axisymmetric = lc.geometry.kind == SceneKind::axisymmetric;
-  return fmt::format(
-      "  \"indentsim\": {},\n"
-      "  \"scene\": {{\"kind\": \"{}\", \"punch\": \"{}\"}},\n"
-      "  \"units\": {{\"depth\": \"m\", \"force\": \"{}\", \"stiffness\": \"{}\", \"stress\": \"Pa\"}},\n"
-      "  \"model\": \"{}\",\n"
-      "  \"material\": {{\"E\": {}, \"nu\": {}, \"e0\": {}, \"yield_stress\": {}, \"hardening\": \"{}\", "
-      "\"kappa\": {}, \"n\": {}}},\n",
-      json_string(version_line()), to_string(lc.geometry.kind), to_string(lc.punch.shape),
-      axisymmetric ? "N (the whole specimen)" : "N/m (per unit thickness, both halves)",
-      axisymmetric ? "N/m" : "N/m per m", to_string(m.model), m.E, m.nu, m.e0,
-      m.yield_stress.value_or(yield_stress_of_e0(m.e0, m.E, m.nu)),
-      to_string(m.hardening), m.kappa, m.n);
+  nlohmann::ordered_json j;
+  j["indentsim"] = version_line();
+  j["scene"] = {{"kind", to_string(lc.geometry.kind)}, {"punch", to_string(lc.punch.shape)}};
+  j["units"] = {{"depth", "m"},
+                {"force", axisymmetric ? "N (the whole specimen)" : "N/m (per unit thickness, both halves)"},
+                {"stiffness", axisymmetric ? "N/m" : "N/m per m"},
+                {"stress", "Pa"}};
+  j["model"] = to_string(m.model);
+  j["material"] = {{"E", m.E},
+                   {"nu", m.nu},
+                   {"e0", m.e0},
+                   {"yield_stress", m.yield_stress.value_or(yield_stress_of_e0(m.e0, m.E, m.nu))},
+                   {"hardening", to_string(m.hardening)},
+                   {"kappa", m.kappa},
+                   {"n", m.n}};
+  return j;
 }
 
 }  // namespace
@@ -124,81 +124,83 @@ void LoadHistorySummary::add(const IncrementRecord& r, double free_surface_depth
   depths_.push_back(r.alpha);
   forces_.push_back(r.force);
   steps_.push_back(r.step);
+  contact_nodes_.push_back(r.contact_nodes);
+  free_surface_depths_.push_back(free_surface_depth);
   if (r.force > peak_force_) peak_force_ = r.force;
   peak_depth_ = std::max(peak_depth_, r.alpha);
-  if (previous_) {
-    const IncrementRecord& previous = *previous_;
-    const bool down = r.alpha < previous.alpha;
-    if (down && !unloading_ && previous.force > 0.0) {
-      // A reversal at `previous`: the first unloading increment's secant is S; the last loading
-      // increment's secant is the loading slope just before it.
-      Unloading u;
-      u.step = previous.step;
-      u.depth = previous.alpha;
-      u.force = previous.force;
-      u.stiffness = (previous.force - r.force) / (previous.alpha - r.alpha);
-      if (before_previous_) {
-        const IncrementRecord& before = *before_previous_;
-        if (before.alpha != previous.alpha)
-          u.loading_stiffness = (previous.force - before.force) / (previous.alpha - before.alpha);
-      }
-      unloadings_.push_back(u);
-    }
-    if (down) unloading_ = true;
-    if (r.alpha > previous.alpha) unloading_ = false;
-    if (unloading_ && !unloadings_.empty() && !unloadings_.back().separated && r.force == 0.0 &&
-        r.contact_nodes == 0) {
-      unloadings_.back().separated = true;
-      unloadings_.back().residual_depth = free_surface_depth;
-      unloadings_.back().separation_step = r.step;
-    }
-  }
-  before_previous_ = previous_;
-  previous_ = r;
 }
 
-std::string LoadHistorySummary::json(const std::string& run_fields, RunStatus status, const std::string& message,
-                                     const PhaseTimes& times, const std::string& result_fields) const {
-  std::string out = fmt::format("{{\n  \"status\": \"{}\",\n", to_string(status));
-  if (!message.empty()) out += fmt::format("  \"message\": {},\n", json_string(message));
-  out += run_fields;
-  if (!times.phases().empty()) {
-    out += "  \"time_s\": {";
-    for (std::size_t k = 0; k < times.phases().size(); ++k)
-      out += fmt::format("{}\"{}\": {:.6f}", k ? ", " : "", times.phases()[k].first, times.phases()[k].second);
-    out += "},\n";
+std::vector<LoadHistorySummary::Unloading> LoadHistorySummary::unloadings() const {
+  std::vector<Unloading> unloadings;
+  for (const CurveBranch& b : unloading_branches(depths_)) {
+    const std::size_t k = b.peak;
+    if (!(forces_[k] > 0.0)) continue;  // the punch had left before the reversal: nothing unloads
+    // The first unloading increment's secant is S; the last loading increment's secant is the
+    // loading slope just before it.
+    Unloading u;
+    u.step = steps_[k];
+    u.depth = depths_[k];
+    u.force = forces_[k];
+    u.stiffness = (forces_[k] - forces_[k + 1]) / (depths_[k] - depths_[k + 1]);
+    if (k > 0 && depths_[k - 1] != depths_[k])
+      u.loading_stiffness = (forces_[k] - forces_[k - 1]) / (depths_[k] - depths_[k - 1]);
+    for (std::size_t i = k + 1; i <= b.end; ++i)
+      if (forces_[i] == 0.0 && contact_nodes_[i] == 0) {
+        u.separated = true;
+        u.residual_depth = free_surface_depths_[i];
+        u.separation_step = steps_[i];
+        break;
+      }
+    unloadings.push_back(u);
   }
-  out += fmt::format("  \"increments\": {},\n  \"peak_depth\": {:.17g},\n"
-                     "  \"peak_force\": {:.17g},\n  \"unloading\": [",
-                     previous_ ? previous_->step : 0, peak_depth_, peak_force_);
-  for (std::size_t i = 0; i < unloadings_.size(); ++i) {
-    const Unloading& u = unloadings_[i];
-    out += fmt::format("{}\n    {{\"step\": {}, \"depth\": {:.17g}, \"force\": {:.17g}, \"stiffness\": {:.17g}, "
-                       "\"loading_stiffness\": {:.17g}, \"separated\": {}, \"residual_depth\": {}, "
-                       "\"separation_step\": {}}}",
-                       i ? "," : "", u.step, u.depth, u.force, u.stiffness, u.loading_stiffness,
-                       u.separated ? "true" : "false",
-                       u.separated ? fmt::format("{:.17g}", u.residual_depth) : std::string("null"),
-                       u.separated ? std::to_string(u.separation_step) : std::string("null"));
+  return unloadings;
+}
+
+std::string LoadHistorySummary::json(const nlohmann::ordered_json& run_fields, RunStatus status,
+                                     const std::string& message, const PhaseTimes& times,
+                                     const nlohmann::ordered_json& result_fields) const {
+  nlohmann::ordered_json j;
+  j["status"] = to_string(status);
+  if (!message.empty()) j["message"] = message;
+  j.update(run_fields);
+  if (!times.phases().empty()) {
+    nlohmann::ordered_json phases = nlohmann::ordered_json::object();
+    for (const auto& [phase, t] : times.phases()) phases[phase] = seconds(t);
+    j["time_s"] = phases;
+  }
+  j["increments"] = steps_.empty() ? 0 : steps_.back();
+  j["peak_depth"] = peak_depth_;
+  j["peak_force"] = peak_force_;
+  nlohmann::ordered_json unloading = nlohmann::ordered_json::array();
+  for (const Unloading& u : unloadings()) {
+    nlohmann::ordered_json b = {{"step", u.step},
+                                {"depth", u.depth},
+                                {"force", u.force},
+                                {"stiffness", u.stiffness},
+                                {"loading_stiffness", u.loading_stiffness},
+                                {"separated", u.separated},
+                                {"residual_depth", u.separated ? nlohmann::ordered_json(u.residual_depth) : nullptr},
+                                {"separation_step", u.separated ? nlohmann::ordered_json(u.separation_step) : nullptr}};
     if (punch_) {
       // The Oliver-Pharr analysis of this branch, next to the true contact at its peak.
-      out.pop_back();  // the object's closing brace: the analysis goes inside it
       std::optional<TrueContact> truth;
       for (const auto& [s, t] : truths_)
         if (s == u.step) truth = t;
       try {
-        for (const CurveBranch& b : unloading_branches(depths_))
-          if (steps_[b.peak] == u.step)
-            out += ", \"analysis\": " + to_json(analyze_branch(depths_, forces_, b, context_, truth), context_, "    ");
+        for (const CurveBranch& branch : unloading_branches(depths_))
+          if (steps_[branch.peak] == u.step)
+            b["analysis"] = branch_json(analyze_branch(depths_, forces_, branch, context_, truth), context_);
       } catch (const AnalysisError& e) {
-        out += ", \"analysis\": null, \"analysis_error\": " + json_string(e.what());
+        b["analysis"] = nullptr;
+        b["analysis_error"] = e.what();
       }
-      out += "}";
     }
+    unloading.push_back(std::move(b));
   }
-  out += unloadings_.empty() ? "]" : "\n  ]";
-  if (!result_fields.empty()) out += ",\n" + result_fields.substr(0, result_fields.size() - 2);  // its last ",\n"
-  return out + "\n}\n";
+  j["unloading"] = std::move(unloading);
+  j.update(result_fields);
+  // Messages may quote a user's bytes (a file name): invalid UTF-8 is replaced, never thrown on.
+  return j.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) + "\n";
 }
 
 RunOutput::RunOutput(const std::filesystem::path& dir, const LoadCase& load_case,
@@ -303,24 +305,27 @@ void RunOutput::finish(const Simulation& sim, RunStatus status, const std::strin
   write_file_atomically(dir_ / "summary.json", summary_.json(run_fields_, status, message, times, error_fields(times)));
 }
 
-std::string RunOutput::error_fields(const PhaseTimes& times) const {
-  std::string out;
+nlohmann::ordered_json RunOutput::error_fields(const PhaseTimes& times) const {
+  nlohmann::ordered_json out = nlohmann::ordered_json::object();
   std::optional<DiscretizationErrorEstimate::AtIncrement> final_estimate;
   if (error_estimate_ && !records_.empty()) {
     const DiscretizationErrorEstimate& e = *error_estimate_;
-    std::string companions;
-    for (const CompanionRun& c : e.companions())
-      companions += fmt::format("{}{}", companions.empty() ? "" : ", ", c.contact_nodes);
-    const auto at_row = [&](const IncrementRecord& r) {
+    nlohmann::ordered_json companions = nlohmann::ordered_json::array();
+    for (const CompanionRun& c : e.companions()) companions.push_back(c.contact_nodes);
+    const auto at_row = [&](const IncrementRecord& r) -> nlohmann::ordered_json {
       const auto estimate = e.at(r);
-      if (!estimate) return std::string("null");
-      return fmt::format("{{\"step\": {}, \"alpha\": {:.17g}, \"P\": {:.17g}, \"P_error_estimate\": {:.6e}, "
-                         "\"P_relative_error_estimate\": {:.6e}, \"P_extrapolated\": {:.17g}, \"P_order\": {:.4g}, "
-                         "\"P_order_observed\": {}, \"a\": {:.17g}, \"a_error_estimate\": {:.6e}}}",
-                         r.step, r.alpha, r.force, estimate->force_error,
-                         r.force != 0.0 ? estimate->force_error / std::abs(r.force) : 0.0, estimate->force_extrapolated,
-                         estimate->force_order, estimate->order_observed ? "true" : "false", r.half_width,
-                         estimate->width_error);
+      if (!estimate) return nullptr;
+      return {{"step", r.step},
+              {"alpha", r.alpha},
+              {"P", r.force},
+              {"P_error_estimate", significant(estimate->force_error, 7)},
+              {"P_relative_error_estimate",
+               significant(r.force != 0.0 ? estimate->force_error / std::abs(r.force) : 0.0, 7)},
+              {"P_extrapolated", estimate->force_extrapolated},
+              {"P_order", significant(estimate->force_order, 4)},
+              {"P_order_observed", estimate->order_observed},
+              {"a", r.half_width},
+              {"a_error_estimate", significant(estimate->width_error, 7)}};
     };
     const IncrementRecord* peak = &records_.front();
     for (const IncrementRecord& r : records_)
@@ -330,33 +335,41 @@ std::string RunOutput::error_fields(const PhaseTimes& times) const {
     // the wall time they added: the run's wait for them ("error estimate" phase), less than their
     // work where they ran on a second core beside the model's build (run_driver.cpp).
     double wait_seconds = 0.0, run_seconds = 0.0;
-    for (const auto& [phase, seconds] : times.phases()) (phase == "error estimate" ? wait_seconds : run_seconds) += seconds;
+    for (const auto& [phase, t] : times.phases()) (phase == "error estimate" ? wait_seconds : run_seconds) += t;
     const double estimate_seconds = e.wall_seconds();
-    out += fmt::format("  \"error_estimate\": {{\"method\": \"{}\", \"contact_nodes\": {}, "
-                       "\"companion_contact_nodes\": [{}], \"P_nominal_order\": {}, \"a_order\": {},\n"
-                       "    \"final\": {},\n    \"peak\": {},\n"
-                       "    \"time_s\": {:.6f}, \"cost_fraction\": {}, \"wall_added_s\": {:.6f}, \"wall_fraction\": {}}},\n",
-                       e.method() == ErrorEstimateChoice::observed ? "observed" : "richardson", e.contact_nodes(),
-                       companions, e.force_order(),
-                       DiscretizationErrorEstimate::nominal_width_order, at_row(records_.back()), at_row(*peak),
-                       estimate_seconds, run_seconds > 0.0 ? fmt::format("{:.4f}", estimate_seconds / run_seconds) : "null",
-                       wait_seconds, run_seconds > 0.0 ? fmt::format("{:.4f}", wait_seconds / run_seconds) : "null");
+    const auto fraction = [&](double t) -> nlohmann::ordered_json {
+      if (run_seconds > 0.0) return ratio(t / run_seconds);
+      return nullptr;
+    };
+    out["error_estimate"] = {{"method", e.method() == ErrorEstimateChoice::observed ? "observed" : "richardson"},
+                             {"contact_nodes", e.contact_nodes()},
+                             {"companion_contact_nodes", companions},
+                             {"P_nominal_order", e.force_order()},
+                             {"a_order", DiscretizationErrorEstimate::nominal_width_order},
+                             {"final", at_row(records_.back())},
+                             {"peak", at_row(*peak)},
+                             {"time_s", seconds(estimate_seconds)},
+                             {"cost_fraction", fraction(estimate_seconds)},
+                             {"wall_added_s", seconds(wait_seconds)},
+                             {"wall_fraction", fraction(wait_seconds)}};
   }
   if (target_choice_) {
-    std::string attempts;
+    nlohmann::ordered_json attempts = nlohmann::ordered_json::array();
     for (const auto& a : target_choice_->attempts)
-      attempts += fmt::format("{}{{\"role\": \"{}\", \"contact_nodes\": {}, \"P_relative_error_estimate\": {:.6e}}}",
-                              attempts.empty() ? "" : ", ", a.role, a.contact_nodes, a.relative_error);
-    std::string reached = "null", met = "null";
+      attempts.push_back({{"role", a.role},
+                          {"contact_nodes", a.contact_nodes},
+                          {"P_relative_error_estimate", significant(a.relative_error, 7)}});
+    nlohmann::ordered_json reached = nullptr, met = nullptr;
     if (final_estimate && !records_.empty() && records_.back().force != 0.0) {
       const double relative = final_estimate->force_error / std::abs(records_.back().force);
-      reached = fmt::format("{:.6e}", relative);
-      met = relative <= target_choice_->target ? "true" : "false";
+      reached = significant(relative, 7);
+      met = relative <= target_choice_->target;
     }
-    out += fmt::format("  \"target_error\": {{\"target\": {}, \"before\": [{}], \"contact_nodes\": {}, "
-                       "\"P_relative_error_estimate\": {}, \"met\": {}}},\n",
-                       target_choice_->target, attempts, error_estimate_ ? error_estimate_->contact_nodes() : 0,
-                       reached, met);
+    out["target_error"] = {{"target", target_choice_->target},
+                           {"before", attempts},
+                           {"contact_nodes", error_estimate_ ? error_estimate_->contact_nodes() : 0},
+                           {"P_relative_error_estimate", reached},
+                           {"met", met}};
   }
   return out;
 }

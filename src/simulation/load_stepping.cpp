@@ -53,10 +53,34 @@ std::vector<double> plan_increments(const LoadInput& load) {
   return alphas;
 }
 
+std::vector<CurveBranch> unloading_branches(const std::vector<double>& depth) {
+  std::vector<CurveBranch> branches;
+  const std::size_t n = depth.size();
+  std::size_t loading_start = 0;
+  bool risen = false;  // the depth rose since the last branch ended (holds do not count)
+  for (std::size_t i = 0; i + 1 < n;) {
+    if (depth[i + 1] > depth[i]) risen = true;
+    if (depth[i + 1] < depth[i] && risen) {
+      CurveBranch b{loading_start, i, i};
+      while (b.end + 1 < n && depth[b.end + 1] < depth[b.end]) ++b.end;
+      branches.push_back(b);
+      loading_start = b.end;
+      risen = false;
+      i = b.end;
+    } else {
+      if (depth[i + 1] < depth[i]) loading_start = i + 1;  // a fall before any rise: loading starts below it
+      ++i;
+    }
+  }
+  return branches;
+}
+
 std::vector<int> reversal_steps(const std::vector<double>& targets) {
   std::vector<int> steps;
-  for (std::size_t k = 1; k + 1 < targets.size(); ++k)
-    if ((targets[k] - targets[k - 1]) * (targets[k + 1] - targets[k]) < 0.0) steps.push_back(static_cast<int>(k));
+  for (const CurveBranch& b : unloading_branches(targets)) {
+    steps.push_back(static_cast<int>(b.peak));
+    if (b.end + 1 < targets.size()) steps.push_back(static_cast<int>(b.end));
+  }
   return steps;
 }
 

@@ -27,6 +27,7 @@
 #include <nlohmann/json_fwd.hpp>
 
 #include "indentsim/input/load_case.hpp"
+#include "indentsim/simulation/load_stepping.hpp"
 
 namespace indentsim {
 
@@ -53,13 +54,7 @@ struct PowerLawFit {
 PowerLawFit fit_unloading(const std::vector<double>& depth, const std::vector<double>& force, double lower,
                           double upper);
 
-/// One unloading branch of a curve: indices [peak, end] into the curve's arrays, the loading
-/// part that led to it starting at `loading_start` (the previous valley or the start).
-struct CurveBranch {
-  std::size_t loading_start = 0, peak = 0, end = 0;
-};
-/// Every unloading branch: a local maximum of the depth followed by decreasing depths.
-std::vector<CurveBranch> unloading_branches(const std::vector<double>& depth);
+/// The branches of a simulated (depth-controlled) curve are unloading_branches (load_stepping.hpp).
 
 /// The unloading branches of a measured, load-controlled curve: from a maximum of the force while
 /// the force falls; a fall that stays above fit_range[0] P_max is a hold's noise and is skipped.
@@ -108,8 +103,6 @@ BranchAnalysis analyze_branch(const std::vector<double>& depth, const std::vecto
 
 /// The branch's numbers as a JSON object, SI (analysis_units says which).
 nlohmann::ordered_json branch_json(const BranchAnalysis& analysis, const AnalysisContext& context);
-/// The same as text, each line after the first indented by `indent` (for summary.json).
-std::string to_json(const BranchAnalysis& analysis, const AnalysisContext& context, const std::string& indent);
 /// The units of branch_json's numbers in the scene, stated once per output.
 nlohmann::ordered_json analysis_units(SceneKind scene);
 

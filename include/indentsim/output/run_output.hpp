@@ -7,6 +7,8 @@
 #include <memory>
 #include <optional>
 
+#include <nlohmann/json.hpp>
+
 #include "indentsim/simulation/error_estimate.hpp"
 #include "indentsim/output/fields.hpp"
 #include "indentsim/analysis/indentation_analysis.hpp"
@@ -77,25 +79,25 @@ public:
   void add(const IncrementRecord& record, double free_surface_depth);
   /// The live state's exact unloading stiffness and contact radius at a peak `step`.
   void set_true_contact(int step, const TrueContact& truth);
-  /// `run_fields`: JSON members (each line ending with a comma) about the run itself.
-  /// `result_fields`: JSON members about the results (each line ending with a comma), after the
-  /// unloading branches.
-  std::string json(const std::string& run_fields, RunStatus status, const std::string& message,
-                   const PhaseTimes& times = PhaseTimes{}, const std::string& result_fields = "") const;
-  const std::vector<Unloading>& unloadings() const { return unloadings_; }
+  /// summary.json's text.  `run_fields`: members about the run itself (after the status);
+  /// `result_fields`: members about the results, after the unloading branches.
+  std::string json(const nlohmann::ordered_json& run_fields, RunStatus status, const std::string& message,
+                   const PhaseTimes& times = PhaseTimes{},
+                   const nlohmann::ordered_json& result_fields = nlohmann::ordered_json::object()) const;
+  /// Every unloading branch of the rows fed so far (unloading_branches, load_stepping.hpp) whose
+  /// peak carries a force.
+  std::vector<Unloading> unloadings() const;
   double peak_depth() const { return peak_depth_; }
   double peak_force() const { return peak_force_; }
 
 private:
-  std::optional<IncrementRecord> previous_, before_previous_;  // the last two rows fed
-  std::vector<Unloading> unloadings_;
   std::shared_ptr<const PunchShape> punch_;  // the indenter's area function (null: no analysis)
   AnalysisContext context_;
   std::vector<double> depths_, forces_;
-  std::vector<int> steps_;
+  std::vector<int> steps_, contact_nodes_;
+  std::vector<double> free_surface_depths_;
   std::vector<std::pair<int, TrueContact>> truths_;
   double peak_depth_ = 0.0, peak_force_ = 0.0;
-  bool unloading_ = false;
 };
 
 /// Everything a run writes into its output folder, as the run goes:
@@ -152,10 +154,10 @@ private:
   std::pair<std::string, std::string> layer_tables(const Simulation& sim, int step, bool header) const;
 
   /// summary.json's "error_estimate" and "target_error" members (each line ending with a comma).
-  std::string error_fields(const PhaseTimes& times) const;
+  nlohmann::ordered_json error_fields(const PhaseTimes& times) const;
 
   std::filesystem::path dir_;
-  std::string run_fields_;
+  nlohmann::ordered_json run_fields_;
   const DiscretizationErrorEstimate* error_estimate_ = nullptr;
   std::optional<TargetErrorChoice> target_choice_;
   LoadHistorySummary summary_;

@@ -1,5 +1,6 @@
 #pragma once
 // The load path: the depth alpha is stepped along piecewise-linear waypoints.
+#include <cstddef>
 #include <vector>
 
 #include "indentsim/input/load_case.hpp"
@@ -13,8 +14,18 @@ std::vector<double> plan_increments(const std::vector<double>& path, int increme
 /// The same, honouring per-segment counts when the load case gives them.
 std::vector<double> plan_increments(const LoadInput& load);
 
-/// The planned increments (indices into `targets`) where the load path reverses: every peak and
-/// every valley strictly inside the path.
+/// One unloading branch of a depth sequence (a planned path, a run's curve, a measured
+/// displacement-controlled curve): indices [peak, end], the loading part that led to it starting
+/// at `loading_start` (the previous branch's end, or the start).
+struct CurveBranch {
+  std::size_t loading_start = 0, peak = 0, end = 0;
+};
+/// Every unloading branch: where the depth falls after having risen (a hold at the peak belongs to
+/// the loading: the branch starts at the hold's last point), to where it stops falling.  The one
+/// reversal detector: the summary, the analysis and the checkpoint schedule all use it.
+std::vector<CurveBranch> unloading_branches(const std::vector<double>& depth);
+/// The planned increments (indices into `targets`) where the load path reverses: every branch's
+/// peak, and its end where the path goes on (the valleys).
 std::vector<int> reversal_steps(const std::vector<double>& targets);
 /// The planned increments after which the depth falls (holds and equal depths included: the
 /// last increment before each descent).  Where the path is at its deepest so far, that state is
