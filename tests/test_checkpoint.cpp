@@ -11,6 +11,7 @@
 
 #include <gtest/gtest.h>
 
+#include <type_traits>
 #include <nlohmann/json.hpp>
 
 #include "indentsim/output/checkpoint.hpp"
@@ -74,6 +75,45 @@ TEST(Checkpoint, RoundTripIsExact) {
     EXPECT_EQ(back.state.history, c.state.history);
     EXPECT_EQ(back.curve.size(), c.curve.size());
   }
+}
+
+// Every field of the run state, each at a value other than its default, comes back from the file:
+// the checkpoint writes and reads the state through its one list of fields (visit_fields).
+TEST(Checkpoint, EveryFieldOfTheRunStateSurvivesTheFile) {
+  Checkpoint c = small_checkpoint("j2");
+  SimulationState& s = c.state;
+  s.warned_fine_zone = true;
+  s.warnings = {"first warning", "second warning"};
+  s.near_field = NearField{true, 3, 2, 1};
+  s.plastic_zone_growth.depths = {1e-5, 2e-5};
+  s.plastic_zone_growth.extents = {{1e-4, 2e-4}, {3e-4, 4e-4}};
+  ASSERT_TRUE(s.has_previous);
+  // Each field described as text, by name, through the same list.
+  const auto describe = [](const SimulationState& state) {
+    std::map<std::string, std::string> fields;
+    visit_fields(state, [&](const char* name, const auto& field, const char*) {
+      std::ostringstream text;
+      text.precision(17);
+      using T = std::decay_t<decltype(field)>;
+      if constexpr (std::is_same_v<T, NearField>)
+        text << field.condensed << ' ' << field.contact_nodes << ' ' << field.elements_x << ' ' << field.elements_y;
+      else if constexpr (std::is_same_v<T, PlasticZoneGrowth>)
+        for (std::size_t k = 0; k < field.depths.size(); ++k)
+          text << field.depths[k] << ' ' << field.extents[k].width << ' ' << field.extents[k].depth << ';';
+      else if constexpr (std::is_arithmetic_v<T>)
+        text << field;
+      else if constexpr (std::is_same_v<T, std::vector<std::string>>)
+        for (const auto& x : field) text << x << ';';
+      else
+        for (const auto& x : field) text << +x << ';';
+      fields[name] = text.str();
+    });
+    return fields;
+  };
+  const auto before = describe(s);
+  EXPECT_EQ(before.size(), 14u);
+  const auto after = describe(deserialize(serialize(c), "memory").state);
+  for (const auto& [name, text] : before) EXPECT_EQ(after.at(name), text) << name;
 }
 
 TEST(Checkpoint, EveryTruncationIsRejected) {

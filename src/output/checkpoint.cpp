@@ -126,19 +126,97 @@ IncrementRecord read_record(ByteReader& in) {
   return r;
 }
 
+/// Writes one state field (visit_fields) in the checkpoint's encoding.
+struct StateWriter {
+  ByteWriter& w;
+  void operator()(const char*, double x, const char*) { w.put(x); }
+  void operator()(const char*, bool b, const char*) { w.put<std::uint8_t>(b); }
+  void operator()(const char*, int i, const char*) { w.put<std::int32_t>(i); }
+  void operator()(const char*, std::uint64_t i, const char*) { w.put(i); }
+  void operator()(const char*, const std::vector<double>& v, const char*) { w.put_vector(v); }
+  void operator()(const char*, const std::vector<char>& v, const char*) { w.put_vector(v); }
+  void operator()(const char*, const std::vector<std::string>& v, const char*) {
+    w.put<std::uint64_t>(v.size());
+    for (const auto& text : v) w.put_string(text);
+  }
+  void operator()(const char*, const NearField& near, const char*) {
+    w.put<std::uint8_t>(near.condensed);
+    w.put<std::int32_t>(near.contact_nodes);
+    w.put<std::int32_t>(near.elements_x);
+    w.put<std::int32_t>(near.elements_y);
+  }
+  void operator()(const char*, const PlasticZoneGrowth& zone, const char*) {
+    w.put_vector(zone.depths);
+    std::vector<double> widths, depths;
+    for (const auto& e : zone.extents) {
+      widths.push_back(e.width);
+      depths.push_back(e.depth);
+    }
+    w.put_vector(widths);
+    w.put_vector(depths);
+  }
+};
+
+/// Reads one state field (visit_fields), checking what is left of the file at every read.
+struct StateReader {
+  ByteReader& in;
+  void operator()(const char*, double& x, const char* what) { x = in.get<double>(what); }
+  void operator()(const char*, bool& b, const char* what) { b = in.get<std::uint8_t>(what) != 0; }
+  void operator()(const char*, int& i, const char* what) { i = in.get<std::int32_t>(what); }
+  void operator()(const char*, std::uint64_t& i, const char* what) { i = in.get<std::uint64_t>(what); }
+  void operator()(const char*, std::vector<double>& v, const char* what) { v = in.get_vector<double>(what); }
+  void operator()(const char*, std::vector<char>& v, const char* what) { v = in.get_vector<char>(what); }
+  void operator()(const char*, std::vector<std::string>& v, const char* what) {
+    const auto n = in.get<std::uint64_t>(what);
+    if (n > in.left()) in.fail(fmt::format("claims more entries in {} than the file holds", what));
+    for (std::uint64_t k = 0; k < n; ++k) v.push_back(in.get_string(what));
+  }
+  void operator()(const char*, NearField& near, const char* what) {
+    near.condensed = in.get<std::uint8_t>(what) != 0;
+    near.contact_nodes = in.get<std::int32_t>(what);
+    near.elements_x = in.get<std::int32_t>(what);
+    near.elements_y = in.get<std::int32_t>(what);
+  }
+  void operator()(const char*, PlasticZoneGrowth& zone, const char* what) {
+    zone.depths = in.get_vector<double>(what);
+    const auto widths = in.get_vector<double>(what);
+    const auto depths = in.get_vector<double>(what);
+    if (widths.size() != depths.size() || widths.size() != zone.depths.size())
+      in.fail("its plastic zone growth has lists of different lengths");
+    for (std::size_t k = 0; k < widths.size(); ++k) zone.extents.push_back({widths[k], depths[k]});
+  }
+};
+
+/// The first state field holding a number that is not finite (nullptr: none).
+struct NonFiniteField {
+  const char* field = nullptr;
+  void note(const char* name, bool finite) {
+    if (!finite && !field) field = name;
+  }
+  static bool all_finite(const std::vector<double>& v) {
+    return std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); });
+  }
+  void operator()(const char* name, double x, const char*) { note(name, std::isfinite(x)); }
+  void operator()(const char* name, const std::vector<double>& v, const char*) { note(name, all_finite(v)); }
+  void operator()(const char* name, const PlasticZoneGrowth& zone, const char*) {
+    bool finite = all_finite(zone.depths);
+    for (const auto& e : zone.extents) finite = finite && std::isfinite(e.width) && std::isfinite(e.depth);
+    note(name, finite);
+  }
+  template <class T>
+  void operator()(const char*, const T&, const char*) {}  // counts, flags, texts
+};
+
 /// The content of a checkpoint whose checksum holds (it may have been recomputed after an edit):
 /// every number finite, the curve a run's curve (steps 0, 1, 2, ..., starting unloaded), and the
 /// state at the curve's last row.  What needs the mesh and the load path is checked in resume_from.
 void check_content(const Checkpoint& c, const ByteReader& in) {
   const SimulationState& s = c.state;
-  const auto finite = [](const std::vector<double>& v) {
-    return std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); });
-  };
-  if (!std::isfinite(s.alpha) || !std::isfinite(s.alpha_previous) || !std::isfinite(s.deepest) ||
-      !std::isfinite(c.planned_contact_half_width))
-    in.fail("its state holds a number that is not finite");
-  if (!finite(s.u) || !finite(s.u_previous) || !finite(s.history)) in.fail("its displacement or material history holds "
-                                                                          "a number that is not finite");
+  const auto finite = NonFiniteField::all_finite;
+  NonFiniteField non_finite;
+  visit_fields(s, non_finite);
+  if (non_finite.field) in.fail(fmt::format("its state's {} holds a number that is not finite", non_finite.field));
+  if (!std::isfinite(c.planned_contact_half_width)) in.fail("its mesh plan is not a finite number");
   if (!finite(c.mesh_x) || !finite(c.mesh_y) || !finite(c.free_surface_depths))
     in.fail("its mesh or summary data hold a number that is not finite");
   if (c.curve.empty()) in.fail("holds no curve row");
@@ -186,32 +264,7 @@ std::string serialize(const Checkpoint& c) {
   payload.put(c.planned_contact_half_width);
   payload.put_vector(c.mesh_x);
   payload.put_vector(c.mesh_y);
-  const SimulationState& s = c.state;
-  payload.put(s.alpha);
-  payload.put(s.alpha_previous);
-  payload.put(s.deepest);
-  payload.put<std::uint8_t>(s.has_previous);
-  payload.put<std::int32_t>(s.rows);
-  payload.put<std::uint64_t>(s.next_target);
-  payload.put<std::uint8_t>(s.warned_fine_zone);
-  payload.put<std::uint64_t>(s.warnings.size());
-  for (const auto& w : s.warnings) payload.put_string(w);
-  payload.put_vector(s.u);
-  payload.put_vector(s.u_previous);
-  payload.put_vector(s.history);
-  payload.put_vector(s.in_contact);
-  payload.put<std::uint8_t>(s.near_field.condensed);
-  payload.put<std::int32_t>(s.near_field.contact_nodes);
-  payload.put<std::int32_t>(s.near_field.elements_x);
-  payload.put<std::int32_t>(s.near_field.elements_y);
-  payload.put_vector(s.plastic_zone_growth.depths);
-  std::vector<double> widths, depths;
-  for (const auto& e : s.plastic_zone_growth.extents) {
-    widths.push_back(e.width);
-    depths.push_back(e.depth);
-  }
-  payload.put_vector(widths);
-  payload.put_vector(depths);
+  visit_fields(c.state, StateWriter{payload});
   payload.put<std::uint64_t>(c.curve.size());
   for (const auto& r : c.curve) write_record(payload, r);
   payload.put_vector(c.free_surface_depths);
@@ -253,31 +306,8 @@ Checkpoint deserialize(const std::string& bytes, const std::string& source) {
   c.planned_contact_half_width = in.get<double>("the mesh plan");
   c.mesh_x = in.get_vector<double>("the mesh");
   c.mesh_y = in.get_vector<double>("the mesh");
-  SimulationState& s = c.state;
-  s.alpha = in.get<double>("the state");
-  s.alpha_previous = in.get<double>("the state");
-  s.deepest = in.get<double>("the state");
-  s.has_previous = in.get<std::uint8_t>("the state") != 0;
-  s.rows = in.get<std::int32_t>("the state");
-  s.next_target = in.get<std::uint64_t>("the state");
-  s.warned_fine_zone = in.get<std::uint8_t>("the state") != 0;
-  const auto warnings = in.get<std::uint64_t>("the warnings");
-  if (warnings > in.left()) in.fail("claims more warnings than the file holds");
-  for (std::uint64_t k = 0; k < warnings; ++k) s.warnings.push_back(in.get_string("a warning"));
-  s.u = in.get_vector<double>("the displacement");
-  s.u_previous = in.get_vector<double>("the previous displacement");
-  s.history = in.get_vector<double>("the material history");
-  s.in_contact = in.get_vector<char>("the contact set");
-  s.near_field.condensed = in.get<std::uint8_t>("the near field") != 0;
-  s.near_field.contact_nodes = in.get<std::int32_t>("the near field");
-  s.near_field.elements_x = in.get<std::int32_t>("the near field");
-  s.near_field.elements_y = in.get<std::int32_t>("the near field");
-  s.plastic_zone_growth.depths = in.get_vector<double>("the plastic zone growth");
-  const auto widths = in.get_vector<double>("the plastic zone growth");
-  const auto depths = in.get_vector<double>("the plastic zone growth");
-  if (widths.size() != depths.size() || widths.size() != s.plastic_zone_growth.depths.size())
-    in.fail("its plastic zone growth has lists of different lengths");
-  for (std::size_t k = 0; k < widths.size(); ++k) s.plastic_zone_growth.extents.push_back({widths[k], depths[k]});
+  visit_fields(c.state, StateReader{in});
+  const SimulationState& s = c.state;
   const auto rows = in.get<std::uint64_t>("the curve");
   if (rows > in.left()) in.fail("claims more curve rows than the file holds");
   for (std::uint64_t k = 0; k < rows; ++k) c.curve.push_back(read_record(in));

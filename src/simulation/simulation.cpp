@@ -238,35 +238,35 @@ void Simulation::build(const RunPlan& run_plan, const std::optional<NearField>& 
   settings_.newton_linear = jacobian == JacobianChoice::krylov ? NewtonLinearSolve::krylov : NewtonLinearSolve::direct;
   settings_.chord_steps = jacobian == JacobianChoice::reuse;
   if (near_field) {
-    near_ = *near_field;
+    state_.near_field = *near_field;
   } else if (run_plan.plastic_zone.empty()) {
-    near_ = choose_near_field(load_case_, *mesh_, plan_, law.has_value(), std::nullopt);
+    state_.near_field = choose_near_field(load_case_, *mesh_, plan_, law.has_value(), std::nullopt);
   } else {
     // Whether to condense is decided on the zone of the deepest point; the near field starts as
     // large as the first increments need and grows with the zone (anticipate_plastic_zone).
-    plastic_zone_growth_ = run_plan.plastic_zone;
-    near_ = choose_near_field(load_case_, *mesh_, plan_, true, plastic_zone_growth_.at(load_case_.max_depth()));
-    if (near_.condensed) {
+    state_.plastic_zone_growth = run_plan.plastic_zone;
+    state_.near_field = choose_near_field(load_case_, *mesh_, plan_, true, state_.plastic_zone_growth.at(load_case_.max_depth()));
+    if (state_.near_field.condensed) {
       const std::vector<double> targets = plan_increments(load_case_.load);
       const auto first = std::find_if(targets.begin(), targets.end(), [](double t) { return t > 0.0; });
-      if (first != targets.end()) near_ = near_field_for_depth(*first);
+      if (first != targets.end()) state_.near_field = near_field_for_depth(*first);
     }
   }
   build_system();
 
-  u_.assign(static_cast<std::size_t>(mesh_->equations()), 0.0);
+  state_.u.assign(static_cast<std::size_t>(mesh_->equations()), 0.0);
 
   const std::vector<std::string> implausible = plausibility_warnings(load_case_, plan_);
-  warnings_.insert(warnings_.end(), implausible.begin(), implausible.end());
+  state_.warnings.insert(state_.warnings.end(), implausible.begin(), implausible.end());
 }
 
 Simulation::~Simulation() = default;
 
 void Simulation::run(const std::function<void(const IncrementRecord&)>& on_increment) {
   const std::vector<double> targets = plan_increments(load_case_.load);
-  while (next_target_ < targets.size()) {
-    const IncrementRecord r = advance_to(targets[next_target_]);
-    ++next_target_;  // before reporting: a checkpoint taken now continues with the next depth
+  while (state_.next_target < targets.size()) {
+    const IncrementRecord r = advance_to(targets[state_.next_target]);
+    ++state_.next_target;  // before reporting: a checkpoint taken now continues with the next depth
     if (on_increment) on_increment(r);
   }
 }
@@ -280,7 +280,7 @@ IncrementRecord Simulation::advance_to(double target) {
   anticipate_plastic_zone(target);
   SolveCounters counters;
   int cutbacks = 0;
-  double step = target - alpha_;
+  double step = target - state_.alpha;
   // The state of the last reported increment, saved before a converged sub-step (after a
   // cutback) moves the simulation past it: an interruption returns to it.
   std::optional<SimulationState> reported;
@@ -292,7 +292,7 @@ IncrementRecord Simulation::advance_to(double target) {
   };
   for (;;) {
     stop_if_requested();
-    double trial = alpha_ + step;
+    double trial = state_.alpha + step;
     if (std::abs(target - trial) <= 1e-12 * std::abs(target)) trial = target;
     if (solve_at(trial, counters, stop_if_requested)) {
       if (trial != target && !reported) reported = state();
@@ -306,7 +306,7 @@ IncrementRecord Simulation::advance_to(double target) {
       if (trial == target) break;
       // Grow the sub-step back after an easy one.
       if (last_report_.iterations <= 3) step *= 2.0;
-      step = std::copysign(std::min(std::abs(step), std::abs(target - alpha_)), target - alpha_);
+      step = std::copysign(std::min(std::abs(step), std::abs(target - state_.alpha)), target - state_.alpha);
       continue;
     }
     if (cutbacks >= load_case_.solver.max_cutbacks) {
@@ -314,7 +314,7 @@ IncrementRecord Simulation::advance_to(double target) {
       throw SolverError(fmt::format(
           "the increment from alpha = {:.6g} m to {:.6g} m did not converge after {} cutbacks (last try: "
           "alpha = {:.6g} m, {} Newton iterations, scaled residual {:.3g}, KINSOL flag {}{}{})",
-          alpha_, target, cutbacks, trial, report.iterations, report.residual, report.kinsol_flag,
+          state_.alpha, target, cutbacks, trial, report.iterations, report.residual, report.kinsol_flag,
           report.message.empty() ? "" : ": ", report.message));
     }
     step *= 0.5;
@@ -341,7 +341,7 @@ IncrementRecord Simulation::advance_to(double target) {
 bool Simulation::solve_at(double trial, SolveCounters& counters, const std::function<void()>& stop_if_requested) {
   // Laws that follow the global load history (Ilyushin's unloading rule) need to know whether
   // this trial goes beyond the deepest point so far.
-  if (plastic_) plastic_->set_loading(trial >= deepest_);
+  if (plastic_) plastic_->set_loading(trial >= state_.deepest);
   const int plain_budget = std::max(8, load_case_.solver.max_newton / 4);
   for (Globalization g : {Globalization::line_search, Globalization::none}) {
     if (g == Globalization::line_search || !last_report_.stopped_while_converging)
@@ -358,28 +358,28 @@ bool Simulation::solve_at(double trial, SolveCounters& counters, const std::func
 // A converged trial becomes the state: the displacement (guess_, already mapped from the Newton
 // system), the depth, and the material history, which moves with every converged (sub-)step.
 void Simulation::commit(double trial) {
-  u_previous_.swap(u_);
-  u_.swap(guess_);
-  alpha_previous_ = alpha_;
-  alpha_ = trial;
-  has_previous_ = true;
-  deepest_ = std::max(deepest_, alpha_);
+  state_.u_previous.swap(state_.u);
+  state_.u.swap(guess_);
+  state_.alpha_previous = state_.alpha;
+  state_.alpha = trial;
+  state_.has_previous = true;
+  state_.deepest = std::max(state_.deepest, state_.alpha);
   largest_condition_ = std::max(largest_condition_, last_report_.condition_estimate);
-  bulk_->commit(u_.data());
+  bulk_->commit(state_.u.data());
 }
 
 void Simulation::predict(double trial, long& iterations, long& factorizations) {
   // The first increment into a virgin specimen has nothing to extrapolate: its previous states
   // are the unloaded one (alpha = 0), so the secant would predict no displacement at all.
-  const bool virgin = deepest_ <= 0.0;
+  const bool virgin = state_.deepest <= 0.0;
   // A specimen clear of the punch carries no load: its displacement stays the committed one for
   // any shallower depth (and is the best start for a deeper one), where the secant would go on
   // with the springback of the increment that released it (the Berkovich cone: 8 Newton
   // iterations for an increment with nothing to solve).
-  if (has_previous_ && !virgin && !clear_of_punch())
-    extrapolate(u_previous_, alpha_previous_, u_, alpha_, trial, guess_);
+  if (state_.has_previous && !virgin && !clear_of_punch())
+    extrapolate(state_.u_previous, state_.alpha_previous, state_.u, state_.alpha, trial, guess_);
   else
-    guess_ = u_;
+    guess_ = state_.u;
   to_system(guess_, system_guess_);
   if (!virgin || !plastic_) return;
   // The elastic contact solution at the same depth settles the contact set before plasticity
@@ -390,12 +390,12 @@ void Simulation::predict(double trial, long& iterations, long& factorizations) {
   if (const int signal = interruption_requested()) throw Interrupted(signal);  // nothing committed yet
   iterations += elastic.iterations;
   factorizations += elastic.factorizations;
-  if (!elastic.converged) to_system(u_, system_guess_);
+  if (!elastic.converged) to_system(state_.u, system_guess_);
 }
 
 bool Simulation::clear_of_punch() const {
   for (const ContactCandidate& c : contact_->candidates())
-    if (ContactBoundary::penetration(c, u_[static_cast<std::size_t>(c.equation)], alpha_) >= 0.0) return false;
+    if (ContactBoundary::penetration(c, state_.u[static_cast<std::size_t>(c.equation)], state_.alpha) >= 0.0) return false;
   return true;
 }
 
@@ -406,8 +406,8 @@ void Simulation::build_system() {
   condensed_bulk_.reset();
   condensed_elastic_.reset();
   condensation_.reset();
-  if (near_.condensed) {
-    condensation_ = std::make_unique<FarFieldCondensation>(*stiffness_, *contact_, near_);
+  if (state_.near_field.condensed) {
+    condensation_ = std::make_unique<FarFieldCondensation>(*stiffness_, *contact_, state_.near_field);
     condensed_elastic_ = std::make_unique<CondensedBulk>(*condensation_, nullptr);
     if (plastic_) condensed_bulk_ = std::make_unique<CondensedBulk>(*condensation_, plastic_.get());
     equations_ = std::make_unique<ContactEquations>(condensation_->pattern(), system_bulk(), *condensed_elastic_,
@@ -448,27 +448,27 @@ void Simulation::from_system(const std::vector<double>& u_system, std::vector<do
 // of the near field is most of a plastic run's time and grows as its unknowns^1.5.
 NearField Simulation::near_field_for_depth(double depth) const {
   const double ahead = std::min(load_case_.max_depth(), 2.0 * depth);
-  NearField near = choose_near_field(load_case_, *mesh_, plan_, true, plastic_zone_growth_.at(ahead));
+  NearField near = choose_near_field(load_case_, *mesh_, plan_, true, state_.plastic_zone_growth.at(ahead));
   near.condensed = true;
   return near;
 }
 
 // Before an increment to `target`: if the near field does not hold the pilot's plastic zone at
 // that depth (with the margins of choose_near_field), grow it ahead.  Only the load path and the
-// pilot decide, so a run resumed from a checkpoint (which holds near_) grows it at the same
+// pilot decide, so a run resumed from a checkpoint (which holds state_.near_field) grows it at the same
 // increments.  grow_near_field stays the check after the fact.
 void Simulation::anticipate_plastic_zone(double target) {
-  if (!condensation_ || plastic_zone_growth_.empty()) return;
-  const double depth = std::max(target, deepest_);
+  if (!condensation_ || state_.plastic_zone_growth.empty()) return;
+  const double depth = std::max(target, state_.deepest);
   const NearField needed =
-      choose_near_field(load_case_, *mesh_, plan_, true, plastic_zone_growth_.at(std::min(depth, load_case_.max_depth())));
-  if (needed.elements_x <= near_.elements_x && needed.elements_y <= near_.elements_y &&
-      needed.contact_nodes <= near_.contact_nodes)
+      choose_near_field(load_case_, *mesh_, plan_, true, state_.plastic_zone_growth.at(std::min(depth, load_case_.max_depth())));
+  if (needed.elements_x <= state_.near_field.elements_x && needed.elements_y <= state_.near_field.elements_y &&
+      needed.contact_nodes <= state_.near_field.contact_nodes)
     return;
   const NearField ahead = near_field_for_depth(depth);
-  near_.elements_x = std::max(near_.elements_x, ahead.elements_x);
-  near_.elements_y = std::max(near_.elements_y, ahead.elements_y);
-  near_.contact_nodes = std::max(near_.contact_nodes, ahead.contact_nodes);
+  state_.near_field.elements_x = std::max(state_.near_field.elements_x, ahead.elements_x);
+  state_.near_field.elements_y = std::max(state_.near_field.elements_y, ahead.elements_y);
+  state_.near_field.contact_nodes = std::max(state_.near_field.contact_nodes, ahead.contact_nodes);
   ++near_field_rebuilds_;
   build_system();
 }
@@ -479,7 +479,7 @@ bool Simulation::grow_near_field(const std::vector<double>& u, double alpha) {
   const auto& candidates = contact_->candidates();
   const double tolerance = 1e-10 * load_case_.max_depth();
   bool penetrates = false;
-  for (std::size_t k = static_cast<std::size_t>(near_.contact_nodes); k < candidates.size(); ++k)
+  for (std::size_t k = static_cast<std::size_t>(state_.near_field.contact_nodes); k < candidates.size(); ++k)
     if (u[candidates[k].equation] + alpha - candidates[k].surface_height > tolerance) penetrates = true;
   // A far element that would leave the elastic range: the near elements must reach it.
   bool yields = false;
@@ -487,7 +487,7 @@ bool Simulation::grow_near_field(const std::vector<double>& u, double alpha) {
     const int top = mesh_->elements_y() - 1;
     for (int ei = 0; ei < mesh_->elements_x() && !yields; ++ei)
       for (int ej = 0; ej < mesh_->elements_y(); ++ej) {
-        if (ei < near_.elements_x && ej > top - near_.elements_y) continue;
+        if (ei < state_.near_field.elements_x && ej > top - state_.near_field.elements_y) continue;
         if (plastic_->inelastic_at(ei, ej, u.data())) {
           yields = true;
           break;
@@ -497,18 +497,18 @@ bool Simulation::grow_near_field(const std::vector<double>& u, double alpha) {
   if (!penetrates && !yields) return false;
   const auto grown = [](int count, int limit) { return std::min(limit, count + count / 2 + 2); };
   if (yields) {
-    near_.elements_x = grown(near_.elements_x, mesh_->elements_x());
-    near_.elements_y = grown(near_.elements_y, mesh_->elements_y());
+    state_.near_field.elements_x = grown(state_.near_field.elements_x, mesh_->elements_x());
+    state_.near_field.elements_y = grown(state_.near_field.elements_y, mesh_->elements_y());
   }
-  if (penetrates) near_.contact_nodes = grown(near_.contact_nodes, mesh_->nodes_x());
-  if (plastic_) near_.contact_nodes = std::max(near_.contact_nodes, std::min(near_.elements_x + 1, mesh_->nodes_x()));
+  if (penetrates) state_.near_field.contact_nodes = grown(state_.near_field.contact_nodes, mesh_->nodes_x());
+  if (plastic_) state_.near_field.contact_nodes = std::max(state_.near_field.contact_nodes, std::min(state_.near_field.elements_x + 1, mesh_->nodes_x()));
   return true;
 }
 
 ContactResult Simulation::contact() const {
-  std::vector<double> internal_force(u_.size());
-  bulk_->internal_force(u_.data(), internal_force.data());
-  return evaluate_contact(*contact_, u_.data(), internal_force.data(), alpha_);
+  std::vector<double> internal_force(state_.u.size());
+  bulk_->internal_force(state_.u.data(), internal_force.data());
+  return evaluate_contact(*contact_, state_.u.data(), internal_force.data(), state_.alpha);
 }
 
 double Simulation::unloading_stiffness() const {
@@ -520,21 +520,9 @@ double Simulation::contact_half_width() const {
 }
 
 SimulationState Simulation::state() const {
-  SimulationState s;
-  s.alpha = alpha_;
-  s.alpha_previous = alpha_previous_;
-  s.deepest = deepest_;
-  s.has_previous = has_previous_;
-  s.rows = rows_;
-  s.next_target = next_target_;
-  s.warned_fine_zone = warned_fine_zone_;
-  s.warnings = warnings_;
-  s.u = u_;
-  s.u_previous = u_previous_;
+  SimulationState s = state_;
   s.history = bulk_->history();
   s.in_contact = contact().in_contact;
-  s.near_field = near_;
-  s.plastic_zone_growth = plastic_zone_growth_;
   return s;
 }
 
@@ -542,17 +530,6 @@ void Simulation::restore(const SimulationState& s) {
   const std::size_t n = static_cast<std::size_t>(mesh_->equations());
   if (s.u.size() != n || (s.has_previous && s.u_previous.size() != n))
     throw std::invalid_argument("the saved displacement does not fit this mesh");
-  alpha_ = s.alpha;
-  alpha_previous_ = s.alpha_previous;
-  deepest_ = s.deepest;
-  has_previous_ = s.has_previous;
-  rows_ = s.rows;
-  next_target_ = s.next_target;
-  warned_fine_zone_ = s.warned_fine_zone;
-  warnings_ = s.warnings;
-  u_ = s.u;
-  u_previous_ = s.u_previous;
-  bulk_->restore(s.history, u_.data());
   const NearField& near = s.near_field;
   if (near.condensed && (near.contact_nodes < 1 || near.contact_nodes > mesh_->nodes_x() || near.elements_x < 0 ||
                          near.elements_x > mesh_->elements_x() || near.elements_y < 0 ||
@@ -565,18 +542,19 @@ void Simulation::restore(const SimulationState& s) {
         return std::isfinite(e.width) && std::isfinite(e.depth) && e.width >= 0.0 && e.depth >= 0.0;
       }))
     throw std::invalid_argument("the saved plastic zone growth is not a list of depths and extents");
-  plastic_zone_growth_ = zone;
-  if (!(s.near_field == near_)) {
-    near_ = s.near_field;
-    build_system();
-  }
+  const bool rebuild = !(near == state_.near_field);
+  state_ = s;
+  state_.history.clear();     // the bulk model holds the live history
+  state_.in_contact.clear();  // implied by u
+  bulk_->restore(s.history, state_.u.data());
+  if (rebuild) build_system();
   if (contact().in_contact != s.in_contact)
     throw std::invalid_argument("the saved contact set does not follow from the saved displacement");
 }
 
 double Simulation::free_surface_depth() const {
   double depth = -std::numeric_limits<double>::infinity();
-  for (const auto& c : contact_->candidates()) depth = std::max(depth, -u_[c.equation] - c.surface_height);
+  for (const auto& c : contact_->candidates()) depth = std::max(depth, -state_.u[c.equation] - c.surface_height);
   return depth;
 }
 
@@ -592,7 +570,7 @@ std::optional<Simulation::Sensitivities> Simulation::sensitivities(const std::ve
   for (MaterialParameter p : parameters)
     if (p == MaterialParameter::nu) return std::nullopt;  // nu also shapes the condensed far field
   std::vector<double> u_system;
-  to_system(u_, u_system);
+  to_system(state_.u, u_system);
   const std::size_t n = u_system.size();
   BulkOperator& bulk = system_bulk();
   const ContactBoundary& contact = condensation_ ? condensation_->contact() : *contact_;
@@ -619,14 +597,14 @@ std::optional<Simulation::Sensitivities> Simulation::sensitivities(const std::ve
   const auto& candidates = contact.candidates();
   std::vector<char> active(candidates.size());
   for (std::size_t k = 0; k < candidates.size(); ++k)
-    active[k] = ContactBoundary::active(candidates[k], force[candidates[k].equation], u_system[candidates[k].equation], alpha_);
+    active[k] = ContactBoundary::active(candidates[k], force[candidates[k].equation], u_system[candidates[k].equation], state_.alpha);
   std::vector<std::vector<double>> du = d_force;
   for (auto& rhs : du) {
     for (double& v : rhs) v = -v;
     for (std::size_t k = 0; k < candidates.size(); ++k)
       if (active[k]) rhs[candidates[k].equation] = 0.0;
   }
-  newton_->solve_linearized(u_system, alpha_, du);
+  newton_->solve_linearized(u_system, state_.alpha, du);
   // While loading this state is the peak of any unloading that follows.
   if (plastic_)
     for (std::size_t b = 1; b < base.size(); ++b) plastic_->record_strain_derivatives(*slots, du[b].data(), base[b]);
@@ -667,7 +645,7 @@ std::optional<Simulation::Sensitivities> Simulation::sensitivities(const std::ve
   Sensitivities result;
   for (const auto& c : combination) {
     double dP = 0.0;
-    std::vector<double> d_u(with_displacement ? u_.size() : 0, 0.0);
+    std::vector<double> d_u(with_displacement ? state_.u.size() : 0, 0.0);
     for (std::size_t b = 0; b < base.size(); ++b) {
       if (c[b] == 0.0) continue;
       dP += c[b] * base_derivative[b];
@@ -684,19 +662,19 @@ std::vector<LayerForce> Simulation::layer_forces() const {
 }
 
 void Simulation::check_fine_zone(double half_width) {
-  if (warned_fine_zone_ || half_width <= plan_.fine_width) return;
-  warned_fine_zone_ = true;
-  warnings_.push_back(fmt::format(
+  if (state_.warned_fine_zone || half_width <= plan_.fine_width) return;
+  state_.warned_fine_zone = true;
+  state_.warnings.push_back(fmt::format(
       "at alpha = {:.4g} m the contact half-width {:.4g} m left the fine mesh zone ({:.4g} m): accuracy drops; "
       "set mesh.contact_half_width or mesh.fine_width larger",
-      alpha_, half_width, plan_.fine_width));
+      state_.alpha, half_width, plan_.fine_width));
 }
 
 IncrementRecord Simulation::record(double wall_seconds, long iterations, long factorizations, int cutbacks) {
   const ContactResult c = contact();
   IncrementRecord r;
-  r.step = rows_++;
-  r.alpha = alpha_;
+  r.step = state_.rows++;
+  r.alpha = state_.alpha;
   r.force = c.force;
   r.half_width = indentsim::contact_half_width(*contact_, c);
   r.contact_nodes = c.contact_nodes;
@@ -709,11 +687,11 @@ IncrementRecord Simulation::record(double wall_seconds, long iterations, long fa
   check_fine_zone(r.half_width);
   // Resolution is judged where the contact is largest, at the deepest point of the path (a history
   // that unloads ends with no contact, which says nothing about the mesh).
-  if (alpha_ == load_case_.max_depth() && c.force > 0.0 && c.contact_nodes < 4) {
+  if (state_.alpha == load_case_.max_depth() && c.force > 0.0 && c.contact_nodes < 4) {
     const std::string coarse = fmt::format("the contact zone spans only {} node(s) at the deepest point: the result "
                                            "is coarse; raise mesh.contact_nodes",
                                            c.contact_nodes);
-    if (std::find(warnings_.begin(), warnings_.end(), coarse) == warnings_.end()) warnings_.push_back(coarse);
+    if (std::find(state_.warnings.begin(), state_.warnings.end(), coarse) == state_.warnings.end()) state_.warnings.push_back(coarse);
   }
   return r;
 }

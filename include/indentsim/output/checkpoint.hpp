@@ -6,9 +6,8 @@
 // Layout (little-endian, as this machine writes it):
 //   "INDSIMCK" | u32 format version | u64 payload length | payload | u64 FNV-1a of all before
 // The payload holds the load case as run (TOML text and its hash), the mesh plan and node
-// coordinates, the simulation state (depths, displacement and predictor state, active contact
-// set, material history at every Gauss point, increment controller, condensed near field), and
-// the curve so far.
+// coordinates, the run state (SimulationState: its fields in the order of visit_fields, which the
+// writer, the reader and the checks all walk), and the curve so far.
 #include <cstdint>
 #include <filesystem>
 #include <memory>

@@ -15,6 +15,7 @@
 #include "indentsim/solvers/layer_forces.hpp"
 #include "indentsim/input/load_case.hpp"
 #include "indentsim/simulation/load_stepping.hpp"
+#include "indentsim/simulation/simulation_state.hpp"
 #include "indentsim/materials/material_parameter.hpp"
 #include "indentsim/geometry/mesh.hpp"
 #include "indentsim/base/phase_times.hpp"
@@ -22,22 +23,6 @@
 #include "indentsim/solvers/solver.hpp"
 
 namespace indentsim {
-
-/// Everything that changes while a run goes on: with the load case (and the mesh plan) it is all
-/// a checkpoint needs to continue the run bit for bit.
-struct SimulationState {
-  double alpha = 0.0, alpha_previous = 0.0, deepest = 0.0;
-  bool has_previous = false;
-  int rows = 0;                    ///< increments reported so far
-  std::uint64_t next_target = 0;   ///< index of the next planned depth
-  bool warned_fine_zone = false;
-  std::vector<std::string> warnings;
-  std::vector<double> u, u_previous;  ///< displacement and the previous one (the predictor's)
-  std::vector<double> history;        ///< the bulk model's carried material state
-  std::vector<char> in_contact;       ///< the active contact set at u (implied by u; kept as a check)
-  NearField near_field;               ///< what the Newton iterations solve for (it may have grown)
-  PlasticZoneGrowth plastic_zone_growth;  ///< the pilot's, which grows near_field ahead (empty: none)
-};
 
 /// The mesh a run uses: planned from the Hertz estimate of the contact, or for a plastic case
 /// from a coarse pilot run of the same case (its contact width and plastic zone); `check` prints
@@ -89,14 +74,15 @@ public:
   /// Solves one increment from the current state to depth `alpha` (with cutbacks).
   IncrementRecord advance_to(double alpha);
 
+  /// The run state, with the bulk model's material history and the contact set filled in.
   SimulationState state() const;
   /// Continues from a saved state (same load case physics, same mesh); throws
   /// std::invalid_argument when the state does not fit this mesh and model.
   void restore(const SimulationState& state);
-  std::uint64_t next_target() const { return next_target_; }
+  std::uint64_t next_target() const { return state_.next_target; }
 
-  double alpha() const { return alpha_; }
-  const std::vector<double>& displacement() const { return u_; }
+  double alpha() const { return state_.alpha; }
+  const std::vector<double>& displacement() const { return state_.u; }
   ContactResult contact() const;
   double contact_half_width() const;
   /// The exact unloading stiffness -dP/d(alpha) at the current state (unloading_stiffness.hpp).
@@ -135,9 +121,9 @@ public:
   /// The sparse direct solver chosen for this run (solver.linear, "auto" resolved).
   LinearSolverKind linear_solver() const { return linear_solver_; }
   /// Warnings raised so far (each once), e.g. a contact zone that left the fine zone.
-  const std::vector<std::string>& warnings() const { return warnings_; }
+  const std::vector<std::string>& warnings() const { return state_.warnings; }
   /// The part of the mesh the Newton iterations solve for (condensed or not).
-  const NearField& near_field() const { return near_; }
+  const NearField& near_field() const { return state_.near_field; }
   /// Unknowns of each Newton system: the condensed near field, or all free equations.
   std::int64_t system_unknowns() const;
   /// Times the near field had to grow (a far element would have yielded, or a far surface node
@@ -147,7 +133,7 @@ public:
   int near_field_rebuilds() const { return near_field_rebuilds_; }
   /// The pilot's plastic zone by depth (empty without a pilot); a resumed run has it from its
   /// checkpoint.
-  const PlasticZoneGrowth& plastic_zone_growth() const { return plastic_zone_growth_; }
+  const PlasticZoneGrowth& plastic_zone_growth() const { return state_.plastic_zone_growth; }
   /// Wall-clock time of this simulation's phases: planning (with the pilot run), model (mesh,
   /// assembly, laws, contact, condensation, KINSOL set-up), stepping (the increments, including a
   /// rebuild when the near field grows).  The driver adds its own (output).
@@ -193,7 +179,6 @@ private:
   BulkModel* bulk_ = nullptr;  // stiffness_ or plastic_
   std::unique_ptr<ContactBoundary> contact_;
   NewtonSettings settings_;
-  NearField near_;
   std::unique_ptr<FarFieldCondensation> condensation_;      // null when the whole mesh is solved
   std::unique_ptr<CondensedBulk> condensed_bulk_, condensed_elastic_;
   std::unique_ptr<ContactEquations> equations_;
@@ -201,16 +186,10 @@ private:
   long retired_symbolic_analyses_ = 0;                      // of systems replaced by a larger near field
   int near_field_growths_ = 0;
   int near_field_rebuilds_ = 0;
-  PlasticZoneGrowth plastic_zone_growth_;  // the pilot's, empty without one
 
-  double alpha_ = 0.0, alpha_previous_ = 0.0;
-  double deepest_ = 0.0;  ///< the largest converged depth so far (the load path's peak)
-  std::vector<double> u_, u_previous_, guess_, system_guess_;
-  bool has_previous_ = false;
-  int rows_ = 0;
-  std::uint64_t next_target_ = 0;
-  std::vector<std::string> warnings_;
-  bool warned_fine_zone_ = false;
+  /// The run state (its material history lives in the bulk model: state() adds it).
+  SimulationState state_;
+  std::vector<double> guess_, system_guess_;  // the trial solution of an increment
   NewtonReport last_report_;
   PhaseTimes times_;
   LinearSolverKind linear_solver_ = LinearSolverKind::klu;
