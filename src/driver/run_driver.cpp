@@ -157,7 +157,7 @@ RunReport drive(Simulation& sim, RunOutput& output, RunObserver& observer, NewRu
         settle_estimate(schedule.due(r.step));
         {
           const PhaseTimes::Scope timing = sim.times().measure("output");
-          output.increment(sim, r);
+          output.increment(sim.snapshot(r));
           inject_fault("increment");
           if (schedule.due(r.step)) checkpoint();
         }
@@ -185,7 +185,8 @@ RunReport drive(Simulation& sim, RunOutput& output, RunObserver& observer, NewRu
     settle_estimate(true);
     {
       const PhaseTimes::Scope timing = sim.times().measure("output");
-      output.finish(sim, report.status, report.message, sim.times());
+      const IncrementRecord last = output.records().empty() ? IncrementRecord{} : output.records().back();
+      output.finish(sim.snapshot(last), report.status, report.message, sim.times());
     }
     pass_warnings();
   } catch (const std::exception& e) {
@@ -289,7 +290,7 @@ RunReport resume_run(const std::string& argument, const std::vector<std::string>
   const auto estimate = estimate_error(*run.simulation, observer);
   folder.clear_earlier_run(in_place ? std::optional<int>(step) : std::nullopt);
   RunOutput output(folder.dir(), run.load_case, estimate.get(), checkpoint.curve, checkpoint.free_surface_depths);
-  output.resumed(*run.simulation);
+  output.resumed(run.simulation->snapshot(checkpoint.curve.back()));
   RunReport report = drive(*run.simulation, output, observer);
   report.wall_seconds = seconds_since(start);
   return report;

@@ -1,5 +1,6 @@
 #include "indentsim/output/run_output.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -7,7 +8,6 @@
 #include <nlohmann/json.hpp>
 
 #include "indentsim/geometry/punch.hpp"
-#include "indentsim/simulation/simulation.hpp"
 #include "indentsim/base/version.hpp"
 
 namespace indentsim {
@@ -253,52 +253,53 @@ RunOutput::RunOutput(const std::filesystem::path& dir, const LoadCase& load_case
   }
 }
 
-void RunOutput::increment(const Simulation& sim, const IncrementRecord& record) {
+void RunOutput::increment(const IncrementSnapshot& state) {
+  const IncrementRecord& record = state.record;
   curve_.write(record);
-  const double depth = sim.free_surface_depth();
-  summary_.add(record, depth);
+  summary_.add(record, state.free_surface_depth);
   records_.push_back(record);
-  depths_.push_back(depth);
+  depths_.push_back(state.free_surface_depth);
   last_step_ = record.step;
-  if (fields_every_ > 0 && record.step % fields_every_ == 0) write_fields(sim, record.step);
-  record_true_contact(sim, record.step);
+  if (fields_every_ > 0 && record.step % fields_every_ == 0) write_fields(state, record.step);
+  record_true_contact(state, record.step);
   // The deepest state is what figures show by default (a history may end unloaded, with nothing
   // to see): its fields are always written and its layer view kept for the tables.
   if (record.alpha == deepest_depth_ && peak_step_ < 0 && record.step > 0) {
     peak_step_ = record.step;
-    if (last_fields_step_ != record.step) write_fields(sim, record.step);
-    peak_tables_ = layer_tables(sim, record.step, true);
+    if (last_fields_step_ != record.step) write_fields(state, record.step);
+    peak_tables_ = layer_tables(state, record.step, true);
   }
 }
 
-void RunOutput::record_true_contact(const Simulation& sim, int step) {
+void RunOutput::record_true_contact(const IncrementSnapshot& state, int step) {
   if (std::find(peak_steps_.begin(), peak_steps_.end(), step) == peak_steps_.end()) return;
-  const ContactResult contact = sim.contact();
-  if (contact.contact_nodes == 0) return;
-  summary_.set_true_contact(step, TrueContact{sim.unloading_stiffness(), sim.contact_half_width()});
+  if (state.contact().contact_nodes == 0) return;
+  summary_.set_true_contact(step, TrueContact{state.unloading_stiffness(), state.contact_half_width()});
 }
 
-std::pair<std::string, std::string> RunOutput::layer_tables(const Simulation& sim, int step, bool header) const {
-  const auto& mesh = sim.mesh();
-  const auto layer = nodal_layer_forces(mesh, sim.bulk());
-  const FieldFrame frame{step, sim.alpha()};
-  return {layers_csv(layer_forces(mesh, layer), sim.contact().force, frame, header),
-          profiles_csv(mesh, profile_lines(mesh, profile_depths_), layer, average_to_nodes(mesh, sim.bulk()), frame,
+std::pair<std::string, std::string> RunOutput::layer_tables(const IncrementSnapshot& state, int step,
+                                                            bool header) const {
+  const Mesh& mesh = state.mesh;
+  const auto layer = nodal_layer_forces(mesh, state.bulk);
+  const FieldFrame frame{step, state.alpha};
+  return {layers_csv(layer_forces(mesh, layer), state.contact().force, frame, header),
+          profiles_csv(mesh, profile_lines(mesh, profile_depths_), layer, average_to_nodes(mesh, state.bulk), frame,
                        header)};
 }
 
-void RunOutput::write_fields(const Simulation& sim, int step) {
-  const NodalStresses nodal = average_to_nodes(sim.mesh(), sim.bulk());
-  fields_.add(step, vtu_document(FieldFrame{step, sim.alpha()}, sim.mesh(), sim.displacement().data(), sim.bulk(), nodal, sim.contact_boundary(),
-                           sim.contact()));
+void RunOutput::write_fields(const IncrementSnapshot& state, int step) {
+  const NodalStresses nodal = average_to_nodes(state.mesh, state.bulk);
+  fields_.add(step, vtu_document(FieldFrame{step, state.alpha}, state.mesh, state.displacement.data(), state.bulk,
+                                 nodal, state.contact_boundary, state.contact()));
   last_fields_step_ = step;
 }
 
-void RunOutput::finish(const Simulation& sim, RunStatus status, const std::string& message, const PhaseTimes& times) {
+void RunOutput::finish(const IncrementSnapshot& final_state, RunStatus status, const std::string& message,
+                       const PhaseTimes& times) {
   if (last_step_ >= 0) {
-    if (last_fields_step_ != last_step_) write_fields(sim, last_step_);
+    if (last_fields_step_ != last_step_) write_fields(final_state, last_step_);
     const bool peak_apart = !peak_tables_.first.empty() && peak_step_ != last_step_;
-    const auto [layers, profiles] = layer_tables(sim, last_step_, !peak_apart);
+    const auto [layers, profiles] = layer_tables(final_state, last_step_, !peak_apart);
     write_file_atomically(dir_ / "layers.csv", peak_apart ? peak_tables_.first + layers : layers);
     write_file_atomically(dir_ / "profiles.csv", peak_apart ? peak_tables_.second + profiles : profiles);
   }

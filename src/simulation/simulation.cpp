@@ -511,6 +511,12 @@ ContactResult Simulation::contact() const {
   return evaluate_contact(*contact_, state_.u.data(), internal_force.data(), state_.alpha);
 }
 
+IncrementSnapshot Simulation::snapshot(const IncrementRecord& record) const {
+  return IncrementSnapshot(
+      record, state_.alpha, free_surface_depth(), *mesh_, state_.u, *bulk_, *contact_, [this] { return contact(); },
+      [this](const ContactResult& c) { return elastic_unloading_stiffness(*stiffness_, *contact_, c); });
+}
+
 double Simulation::unloading_stiffness() const {
   return elastic_unloading_stiffness(*stiffness_, *contact_, contact());
 }

@@ -13,6 +13,7 @@
 #include "indentsim/output/fields.hpp"
 #include "indentsim/analysis/indentation_analysis.hpp"
 #include "indentsim/base/file_system.hpp"
+#include "indentsim/simulation/increment_snapshot.hpp"
 #include "indentsim/simulation/load_stepping.hpp"
 #include "indentsim/base/phase_times.hpp"
 
@@ -54,7 +55,6 @@ private:
 enum class RunStatus { running, finished, not_converged, stopped, failed };
 std::string to_string(RunStatus status);
 
-class Simulation;
 
 /// What indentation users read off a load history (DIR/summary.json): the peak, and for every
 /// unloading branch the unloading stiffness S = dP/dalpha at its start, the residual depth
@@ -126,15 +126,17 @@ public:
   void set_error_estimate(const DiscretizationErrorEstimate* error_estimate);
   /// How mesh.target_error chose this run's mesh (summary.json "target_error").
   void set_target_choice(const TargetErrorChoice& choice) { target_choice_ = choice; }
-  void increment(const Simulation& sim, const IncrementRecord& record);
+  /// A converged increment (Simulation::snapshot): its row, and its fields and tables when due.
+  void increment(const IncrementSnapshot& state);
   /// A resumed run's live state, restored at the last replayed increment: a peak's exact
   /// unloading stiffness is taken from it when the run resumes exactly there.
-  void resumed(const Simulation& sim) {
-    if (!records_.empty()) record_true_contact(sim, records_.back().step);
+  void resumed(const IncrementSnapshot& state) {
+    if (!records_.empty()) record_true_contact(state, records_.back().step);
   }
   /// Writes the final state's fields, the layer view and summary.json with `status` (not
   /// "failed": use fail()).
-  void finish(const Simulation& sim, RunStatus status, const std::string& message = "",
+  /// `final_state`: the state the run ends in (the last row's).
+  void finish(const IncrementSnapshot& final_state, RunStatus status, const std::string& message = "",
               const PhaseTimes& times = PhaseTimes{});
   /// Marks the folder as a failed run (summary.json "failed" with `message`), as far as the file
   /// system still allows; never throws.
@@ -147,11 +149,11 @@ private:
   RunOutput(const std::filesystem::path& dir, const LoadCase& load_case,
             const DiscretizationErrorEstimate* error_estimate, const std::vector<IncrementRecord>& replay_curve,
             const std::vector<double>& replay_depths, bool error_estimate_pending);
-  void write_fields(const Simulation& sim, int step);
+  void write_fields(const IncrementSnapshot& state, int step);
   /// At a peak of the load path: the exact unloading stiffness and the true contact radius.
-  void record_true_contact(const Simulation& sim, int step);
-  /// The layer view of the simulation's current state: {layers.csv rows, profiles.csv rows}.
-  std::pair<std::string, std::string> layer_tables(const Simulation& sim, int step, bool header) const;
+  void record_true_contact(const IncrementSnapshot& state, int step);
+  /// The layer view of a state: {layers.csv rows, profiles.csv rows}.
+  std::pair<std::string, std::string> layer_tables(const IncrementSnapshot& state, int step, bool header) const;
 
   /// summary.json's "error_estimate" and "target_error" members (each line ending with a comma).
   nlohmann::ordered_json error_fields(const PhaseTimes& times) const;

@@ -14,6 +14,7 @@
 #include "indentsim/solvers/contact.hpp"
 #include "indentsim/solvers/layer_forces.hpp"
 #include "indentsim/input/load_case.hpp"
+#include "indentsim/simulation/increment_snapshot.hpp"
 #include "indentsim/simulation/load_stepping.hpp"
 #include "indentsim/simulation/simulation_state.hpp"
 #include "indentsim/materials/material_parameter.hpp"
@@ -80,6 +81,10 @@ public:
   /// std::invalid_argument when the state does not fit this mesh and model.
   void restore(const SimulationState& state);
   std::uint64_t next_target() const { return state_.next_target; }
+
+  /// The current (converged) state as the writers read it, `record` its row; valid until the
+  /// simulation moves on.
+  IncrementSnapshot snapshot(const IncrementRecord& record) const;
 
   double alpha() const { return state_.alpha; }
   const std::vector<double>& displacement() const { return state_.u; }
