@@ -6,7 +6,7 @@
                                      (B's build); exit 1 on any difference
 
 What must be identical (issue 36): curve.csv in every column but the wall time; summary.json in
-every number but its timings (and the build's commit string); case.toml but for output.dir and the build's line;
+every number but its timings (and the build's commit string; B may add members); case.toml but for output.dir and the build's line;
 layers.csv, profiles.csv, the VTU fields and fields.pvd byte for byte.  Checkpoints record the
 run folder's path and each row's wall time, so they are checked by what they do: `compare` resumes
 the middle checkpoint of every case of A with B's CLI and asks for A's curve and summary again).
@@ -57,6 +57,15 @@ def without_timings(value):
     return value
 
 
+def holds(a, b):
+    """B holds everything A says, with the same values (B may say more: a new member)."""
+    if isinstance(a, dict):
+        return isinstance(b, dict) and all(k in b and holds(v, b[k]) for k, v in a.items())
+    if isinstance(a, list):
+        return isinstance(b, list) and len(a) == len(b) and all(holds(x, y) for x, y in zip(a, b))
+    return a == b
+
+
 def compare_curve(a, b):
     with open(a, newline="") as fa, open(b, newline="") as fb:
         ra, rb = list(csv.DictReader(fa)), list(csv.DictReader(fb))
@@ -77,7 +86,7 @@ def compare_run(pa, pb):
     if why:
         return f"curve.csv: {why}"
     ja, jb = (without_timings(json.loads((p / "summary.json").read_text())) for p in (pa, pb))
-    return None if ja == jb else "summary.json: numbers differ"
+    return None if holds(ja, jb) else "summary.json: numbers differ"
 
 
 def resume_checkpoints(a, cli):
@@ -114,7 +123,7 @@ def compare(a, b, cli):
             why = compare_curve(pa, pb)
         elif rel.name == "summary.json":
             ja, jb = (without_timings(json.loads(p.read_text())) for p in (pa, pb))
-            why = None if ja == jb else "numbers differ"
+            why = None if holds(ja, jb) else "numbers differ"
         elif rel.name == "case.toml":
             la, lb = ([l for l in p.read_text().splitlines() if not l.startswith(("dir = ", "# Written by"))]
                       for p in (pa, pb))

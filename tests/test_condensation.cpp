@@ -334,3 +334,19 @@ TEST(KrylovSolves, KeepTheCurveWithFewerFactorizations) {
                                fresh.factorizations));
   }
 }
+
+// The configuration a run is built on (resolve_choices, what `check` prints) counts the near
+// field's unknowns from the mesh alone, as the condensation then builds them: the linear solver
+// "auto" is decided on that count.
+TEST(FarFieldCondensation, TheConfigurationCountsTheNearFieldAsTheCondensationBuildsIt) {
+  for (const char* name : {"elastic.toml", "deep_plastic.toml", "paper.toml", "axisymmetric/steel_sphere.toml",
+                           "axisymmetric/berkovich_cone.toml", "axisymmetric/flat_punch.toml"}) {
+    SCOPED_TRACE(name);
+    const Simulation sim(shipped_case(name, {"mesh.contact_nodes=8", "solver.linear=\"auto\""}));
+    const RunConfiguration& c = sim.configuration();
+    EXPECT_EQ(c.near_field, sim.near_field());
+    EXPECT_EQ(c.system_unknowns, sim.system_unknowns());
+    EXPECT_EQ(c.unknowns, sim.mesh().equations());
+    EXPECT_EQ(c.element, sim.mesh().element_kind());
+  }
+}

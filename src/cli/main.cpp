@@ -113,11 +113,14 @@ int report_end(const RunReport& report, bool quiet) {
 int command_check(const std::string& file, const std::vector<std::string>& overrides) {
   const LoadCase lc = read_load_case(file, overrides);
   inspect_output_dir(lc.output.dir, lc.source);
-  const MeshPlan p = plan_run(lc).mesh;  // the plan run uses, pilot included
+  const RunConfiguration configuration = resolve_choices(lc, plan_run(lc));  // what run uses, pilot included
+  const MeshPlan& p = configuration.plan.mesh;
   for (const auto& warning : plausibility_warnings(lc, p)) fmt::print(stderr, "warning: {}\n", warning);
   fmt::print("{}: valid; model {}, depth up to {:.4g} m in {} increments; mesh {} x {} nodes, {} unknowns\n", file,
              to_string(lc.material.model), lc.max_depth(), lc.load.increments, p.nodes_x, p.nodes_y,
-             Mesh::from_plan(lc, p).equations());
+             configuration.unknowns);
+  fmt::print("the run's configuration (every \"auto\" resolved):\n");
+  for (const auto& [name, value] : describe(configuration)) fmt::print("  {}: {}\n", name, value);
   return 0;
 }
 

@@ -240,6 +240,7 @@ RunReport run_load_case(LoadCase lc, RunObserver& observer) {
     const auto& estimate = run.estimate;
     folder.clear_earlier_run();
     RunOutput output = run.companions.valid() ? RunOutput(folder.dir(), lc, true) : RunOutput(folder.dir(), lc, estimate.get());
+    output.set_configuration(run.simulation->configuration());
     if (target) output.set_target_choice(*target);
     RunReport report = drive(sim, output, observer, &run);
     report.wall_seconds = seconds_since(start);
@@ -290,6 +291,7 @@ RunReport resume_run(const std::string& argument, const std::vector<std::string>
   const auto estimate = estimate_error(*run.simulation, observer);
   folder.clear_earlier_run(in_place ? std::optional<int>(step) : std::nullopt);
   RunOutput output(folder.dir(), run.load_case, estimate.get(), checkpoint.curve, checkpoint.free_surface_depths);
+  output.set_configuration(run.simulation->configuration());
   output.resumed(run.simulation->snapshot(checkpoint.curve.back()));
   RunReport report = drive(*run.simulation, output, observer);
   report.wall_seconds = seconds_since(start);

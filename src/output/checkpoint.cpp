@@ -522,7 +522,11 @@ ResumedRun resume_from(const Checkpoint& c, const std::string& source, const std
   // The run continues on the near field it had (bit for bit), unless --set asks for the whole mesh.
   SimulationState state = c.state;
   if (run.load_case.solver.far_field == FarFieldChoice::full) state.near_field = NearField{};
-  run.simulation = std::make_unique<Simulation>(run.load_case, c.planned_contact_half_width, state.near_field);
+  // The configuration is the run's own (its mesh plan, the pilot's plastic zone as checkpointed),
+  // so a resumed run makes the same choices and says so in its summary.
+  const RunConfiguration configuration = resolve_choices(
+      run.load_case, RunPlan{plan_mesh(run.load_case, c.planned_contact_half_width), state.plastic_zone_growth});
+  run.simulation = std::make_unique<Simulation>(run.load_case, configuration, state.near_field);
   if (run.simulation->mesh().x() != c.mesh_x || run.simulation->mesh().y() != c.mesh_y)
     fail("its mesh does not match the mesh its load case gives (written by another version of indentsim?)");
   try {

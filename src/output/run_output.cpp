@@ -211,6 +211,12 @@ RunOutput::RunOutput(const std::filesystem::path& dir, const LoadCase& load_case
 RunOutput::RunOutput(const std::filesystem::path& dir, const LoadCase& load_case, bool error_estimate_pending)
     : RunOutput(dir, load_case, nullptr, {}, {}, error_estimate_pending) {}
 
+void RunOutput::set_configuration(const RunConfiguration& configuration) {
+  nlohmann::ordered_json j = nlohmann::ordered_json::object();
+  for (const auto& [name, value] : describe(configuration)) j[name] = value;
+  run_fields_["configuration"] = std::move(j);
+}
+
 void RunOutput::set_error_estimate(const DiscretizationErrorEstimate* error_estimate) {
   error_estimate_ = error_estimate;
   curve_.set_error_estimate(error_estimate, records_);

@@ -19,63 +19,6 @@ namespace indentsim {
 
 namespace {
 
-// Measured (CHANGELOG, with Debian's OpenBLAS): CHOLMOD is faster than KLU from the smallest
-// meshes tried (1.6x at 684 unknowns, 2.1x at 1860, 6.2x at 40k); below ~1000 unknowns both take
-// milliseconds and KLU, the user's default, is kept.
-constexpr int cholmod_crossover_unknowns = 1000;
-constexpr double max_relative_contact = 0.1;  // a / lx and a / ly beyond which the run warns
-constexpr double min_plausible_modulus = 1e3, max_plausible_modulus = 2e12;  // [Pa]
-
-// Plastic scenes spread their contact wider than the elastic Hertz estimate, up to the punch's
-// chord sqrt(2 R alpha) when the material flows freely.  A coarse pilot run of the same load
-// case (8 elements across the chord, 4 increments) measures the final contact half-width and
-// how far the plastic zone reaches at each of its increments; the real mesh is planned from the
-// first with a 5% margin, the condensed near field from the second, as it grows with the depth.
-// The pilot sets mesh.contact_half_width itself, so it never runs a pilot of its own, and solves
-// its small mesh whole.  Should it fail, the chord is a safe upper bound and the near field falls
-// back to its default.
-struct PilotResult {
-  double contact_half_width = 0.0;
-  PlasticZoneGrowth plastic_zone;
-};
-
-PilotResult pilot_run(const LoadCase& lc) {
-  const double depth = lc.max_depth();
-  // Where the punch meets the undeformed surface: the sphere's chord sqrt(2 R alpha - alpha^2).
-  const double chord = make_punch(lc.punch)->geometric_contact_radius(depth);
-  LoadCase pilot = lc;
-  pilot.mesh = MeshInput{};
-  pilot.mesh.contact_nodes = 8;
-  pilot.mesh.contact_half_width = chord;
-  pilot.load.path = {0.0, depth};
-  pilot.load.increments = 4;
-  pilot.solver.tolerance = std::max(lc.solver.tolerance, 1e-9);
-  pilot.solver.far_field = FarFieldChoice::full;
-  double widest = 0.0;
-  try {
-    Simulation sim(pilot);
-    PlasticZoneGrowth growth;
-    sim.run([&](const IncrementRecord& r) {
-      widest = std::max(widest, r.half_width);
-      if (r.step == 0) return;
-      const Mesh& mesh = sim.mesh();
-      PlasticExtent zone;
-      for (int ei = 0; ei < mesh.elements_x(); ++ei)
-        for (int ej = 0; ej < mesh.elements_y(); ++ej)
-          for (std::size_t g = 0; g < 4; ++g)
-            if (sim.plasticity()->law().has_yielded(4 * static_cast<std::size_t>(mesh.element(ei, ej)) + g)) {
-              zone.width = std::max(zone.width, mesh.x(ei + 1));
-              zone.depth = std::max(zone.depth, -mesh.y(ej));
-            }
-      growth.depths.push_back(r.alpha);
-      growth.extents.push_back(zone);
-    });
-    return {widest > 0.0 ? std::min(chord, 1.05 * widest) : chord, growth};
-  } catch (const SolverError&) {
-    return {chord, {}};
-  }
-}
-
 // Deformation theory is exact for monotone loading; Ilyushin's unloading rule is switched on
 // only when the load path itself unloads (a scene that never unloads does not pay for it).
 bool unloads(const std::vector<double>& path) {
@@ -84,118 +27,35 @@ bool unloads(const std::vector<double>& path) {
   return false;
 }
 
-// "auto": KLU below the measured crossover, CHOLMOD's supernodal Cholesky above it.
-LinearSolverKind choose_linear_solver(LinearSolverChoice choice, int unknowns) {
-  switch (choice) {
-    case LinearSolverChoice::klu: return LinearSolverKind::klu;
-    case LinearSolverChoice::cholmod: return LinearSolverKind::cholmod;
-    case LinearSolverChoice::automatic: break;
-  }
-  return unknowns >= cholmod_crossover_unknowns ? LinearSolverKind::cholmod : LinearSolverKind::klu;
-}
-
-// Every surface node within 1.3 a + 2 h of the axis may touch (a the planned final contact
-// half-width, h the fine spacing); every element within 1.3 times the pilot's plastic zone plus
-// 2 h (or, without a pilot, within 2.5 a) may yield.  Generous on purpose: a near field too
-// small is detected after the increment and grown (Simulation::grow_near_field), which costs a
-// new condensation; one too large only costs unknowns.  "auto" solves the whole mesh only when the
-// near field would hold more than 80% of its unknowns: measured on deep_plastic.toml, a near field
-// of 55% of the unknowns still cut the time per increment by 40% (docs/DESIGN.md, section 7).
-NearField choose_near_field(const LoadCase& lc, const Mesh& mesh, const MeshPlan& plan, bool plastic,
-                            const std::optional<PlasticExtent>& plastic_zone) {
-  NearField near;
-  if (lc.solver.far_field == FarFieldChoice::full) return near;
-  const double a = plan.contact_half_width_estimate, h = plan.fine_spacing;
-  const double contact_width = 1.3 * a + 2.0 * h;
-  while (near.contact_nodes < mesh.nodes_x() && mesh.x(near.contact_nodes) <= contact_width) ++near.contact_nodes;
-  near.contact_nodes = std::min(mesh.nodes_x(), near.contact_nodes + 1);
-  if (plastic) {
-    const double width = plastic_zone ? std::max(1.3 * plastic_zone->width, contact_width) + 2.0 * h : 2.5 * a;
-    const double depth = plastic_zone ? 1.3 * plastic_zone->depth + 2.0 * h : 2.5 * a;
-    while (near.elements_x < mesh.elements_x() && mesh.x(near.elements_x) < width) ++near.elements_x;
-    while (near.elements_y < mesh.elements_y() && -mesh.y(mesh.top_row() - near.elements_y) < depth) ++near.elements_y;
-    near.contact_nodes = std::max(near.contact_nodes, near.elements_x + 1);
-  }
-  const double near_unknowns = 2.0 * (near.elements_x + 1) * (near.elements_y + 1) + near.contact_nodes;
-  near.condensed = lc.solver.far_field == FarFieldChoice::condense || near_unknowns <= 0.8 * mesh.equations();
-  return near;
-}
-
 }  // namespace
-
-// "auto": the paper's exact Q1 element unless the scene locks it -- nearly incompressible
-// elasticity (nu >= 0.45), nearly perfect plasticity (isochoric flow with kappa > 0.95 or
-// n < 0.1), or a plastic material under a cone, whose strain is set by the angle and not by the
-// depth, so the flow under it is fully plastic and isochoric from the first increment (Q1 locks:
-// on berkovich_cone with Ilyushin's law it overestimates P/h^2 by 1%, with a sawtooth 1.5x as
-// large) -- where mean dilatation (B-bar) is used.
-ElementKind choose_element(const LoadCase& lc) {
-  switch (lc.mesh.element) {
-    case ElementChoice::q1: return ElementKind::q1;
-    case ElementChoice::bbar: return ElementKind::bbar;
-    case ElementChoice::automatic: break;
-  }
-  const auto& m = lc.material;
-  const bool near_incompressible = m.nu >= 0.45;
-  const bool plastic = m.model != MaterialModel::elastic;
-  const bool near_perfect_plasticity =
-      plastic && (m.hardening == HardeningLaw::linear ? m.kappa > 0.95 : m.n < 0.1);
-  const bool sharp_plastic_indentation = plastic && lc.punch.shape == PunchShapeKind::cone;
-  return near_incompressible || near_perfect_plasticity || sharp_plastic_indentation ? ElementKind::bbar
-                                                                                       : ElementKind::q1;
-}
-
-std::vector<std::string> plausibility_warnings(const LoadCase& lc, const MeshPlan& plan) {
-  std::vector<std::string> warnings;
-  // Unit slips: a modulus given in GPa or MPa instead of Pa runs, and gives forces 1e6-1e9 off.
-  if (lc.material.E < min_plausible_modulus || lc.material.E > max_plausible_modulus)
-    warnings.push_back(fmt::format("material.E = {:g} Pa is outside the moduli of solids ({:g} Pa to {:g} Pa): "
-                                   "pascals are meant (210 GPa is 210e9)",
-                                   lc.material.E, min_plausible_modulus, max_plausible_modulus));
-  // The model is small-strain with the gap measured vertically (docs/MODEL.md §3): both need slopes
-  // and depths small against the punch's size.
-  if (auto slope = make_punch(lc.punch)->slope_warning(lc.max_depth())) warnings.push_back(*slope);
-  // A contact that is not small against the specimen: its edges and base shape P well beyond the
-  // discretization error (docs/user-guide.md, "Choosing the specimen").
-  const double a = plan.contact_half_width_estimate;
-  for (const auto& [key, size] : {std::pair<const char*, double>{"geometry.lx", lc.geometry.lx}, {"geometry.ly", lc.geometry.ly}})
-    if (a > max_relative_contact * size)
-      warnings.push_back(fmt::format("the contact half-width (about {:.3g} m) is {:.2g} of {} = {:.3g} m: the "
-                                     "specimen's edges change P far beyond the discretization error (keep a / {} "
-                                     "below {:g}; is punch.radius in metres?)",
-                                     a, a / size, key, size, key, max_relative_contact));
-  return warnings;
-}
-
-RunPlan plan_run(const LoadCase& load_case, std::optional<double> planned_contact_half_width) {
-  RunPlan plan{plan_mesh(load_case), {}};  // also refuses a mesh too large before any work
-  if (planned_contact_half_width) {
-    plan.mesh = plan_mesh(load_case, planned_contact_half_width);
-  } else if (load_case.material.model != MaterialModel::elastic && !load_case.mesh.contact_half_width) {
-    const PilotResult pilot = pilot_run(load_case);
-    plan.mesh = plan_mesh(load_case, pilot.contact_half_width);
-    plan.plastic_zone = pilot.plastic_zone;
-  }
-  return plan;
-}
 
 Simulation::Simulation(LoadCase load_case, std::optional<double> planned_contact_half_width,
                        std::optional<NearField> near_field)
     : load_case_(std::move(load_case)) {
-  RunPlan run_plan;
+  RunConfiguration configuration;
   {
     const PhaseTimes::Scope timing = times_.measure("planning");
-    run_plan = plan_run(load_case_, planned_contact_half_width);
+    configuration = resolve_choices(load_case_, plan_run(load_case_, planned_contact_half_width), near_field);
   }
-  build(run_plan, near_field);
+  build(configuration);
 }
 
 Simulation::Simulation(LoadCase load_case, const RunPlan& plan, PhaseTimes times)
     : load_case_(std::move(load_case)), times_(std::move(times)) {
-  build(plan, std::nullopt);
+  RunConfiguration configuration;
+  {
+    const PhaseTimes::Scope timing = times_.measure("planning");
+    configuration = resolve_choices(load_case_, plan);
+  }
+  build(configuration);
 }
 
-void Simulation::build(const RunPlan& run_plan, const std::optional<NearField>& near_field) {
+Simulation::Simulation(LoadCase load_case, const RunConfiguration& configuration, const NearField& start)
+    : load_case_(std::move(load_case)) {
+  build(configuration, start);
+}
+
+void Simulation::build(const RunConfiguration& configuration, const std::optional<NearField>& start) {
   limit_library_threads();  // one BLAS/OpenMP thread per run (worker_threads.hpp)
   const auto& m = load_case_.material;
   const ElasticMaterial material{m.E, m.nu};
@@ -206,10 +66,11 @@ void Simulation::build(const RunPlan& run_plan, const std::optional<NearField>& 
       throw InputError(load_case_.source, m.hardening == HardeningLaw::linear ? "material.kappa" : "material.n",
                        *violation);
   }
-  plan_ = run_plan.mesh;
+  config_ = configuration;
+  const MeshPlan& plan = config_.plan.mesh;
   const PhaseTimes::Scope timing = times_.measure("model");
-  mesh_ = std::make_unique<Mesh>(Mesh::from_plan(load_case_, plan_));
-  mesh_->set_element_kind(choose_element(load_case_));
+  mesh_ = std::make_unique<Mesh>(Mesh::from_plan(load_case_, plan));
+  mesh_->set_element_kind(config_.element);
   pattern_ = std::make_unique<StiffnessPattern>(*mesh_);
   stiffness_ = std::make_unique<ElasticStiffness>(*mesh_, material, *pattern_);
   bulk_ = stiffness_.get();
@@ -226,37 +87,19 @@ void Simulation::build(const RunPlan& run_plan, const std::optional<NearField>& 
   // Newton's residual is measured against the nodal forces of the scene: E* alpha_max per unit
   // thickness in plane strain, times the ring 2 pi a* in axisymmetry (docs/DESIGN.md §3).
   settings_.force_scale = mesh_->kinematics().nodal_force_scale(
-      material.plane_strain_modulus() * load_case_.max_depth(), plan_.contact_half_width_estimate);
+      material.plane_strain_modulus() * load_case_.max_depth(), plan.contact_half_width_estimate);
   settings_.tolerance = load_case_.solver.tolerance;
   settings_.max_iterations = load_case_.solver.max_newton;
-  // Plastic Newton iterations contract linearly (each moves the yield front across Gauss points
-  // where the tangent jumps), so a factorization kept as GMRES's preconditioner serves several of
-  // them; elastic contact converges in two or three exact steps on a small condensed system.
-  const JacobianChoice jacobian = load_case_.solver.jacobian == JacobianChoice::automatic
-                                      ? (law ? JacobianChoice::krylov : JacobianChoice::reuse)
-                                      : load_case_.solver.jacobian;
+  const JacobianChoice jacobian = config_.jacobian;
   settings_.newton_linear = jacobian == JacobianChoice::krylov ? NewtonLinearSolve::krylov : NewtonLinearSolve::direct;
   settings_.chord_steps = jacobian == JacobianChoice::reuse;
-  if (near_field) {
-    state_.near_field = *near_field;
-  } else if (run_plan.plastic_zone.empty()) {
-    state_.near_field = choose_near_field(load_case_, *mesh_, plan_, law.has_value(), std::nullopt);
-  } else {
-    // Whether to condense is decided on the zone of the deepest point; the near field starts as
-    // large as the first increments need and grows with the zone (anticipate_plastic_zone).
-    state_.plastic_zone_growth = run_plan.plastic_zone;
-    state_.near_field = choose_near_field(load_case_, *mesh_, plan_, true, state_.plastic_zone_growth.at(load_case_.max_depth()));
-    if (state_.near_field.condensed) {
-      const std::vector<double> targets = plan_increments(load_case_.load);
-      const auto first = std::find_if(targets.begin(), targets.end(), [](double t) { return t > 0.0; });
-      if (first != targets.end()) state_.near_field = near_field_for_depth(*first);
-    }
-  }
+  state_.near_field = start.value_or(config_.near_field);
+  state_.plastic_zone_growth = config_.plan.plastic_zone;
   build_system();
 
   state_.u.assign(static_cast<std::size_t>(mesh_->equations()), 0.0);
 
-  const std::vector<std::string> implausible = plausibility_warnings(load_case_, plan_);
+  const std::vector<std::string> implausible = plausibility_warnings(load_case_, plan);
   state_.warnings.insert(state_.warnings.end(), implausible.begin(), implausible.end());
 }
 
@@ -415,7 +258,7 @@ void Simulation::build_system() {
   } else {
     equations_ = std::make_unique<ContactEquations>(*pattern_, *bulk_, *stiffness_, *contact_);
   }
-  settings_.linear = linear_solver_ = choose_linear_solver(load_case_.solver.linear, static_cast<int>(system_unknowns()));
+  settings_.linear = config_.linear_solver;
   newton_ = std::make_unique<NewtonSolver>(*equations_, settings_);
 }
 
@@ -446,13 +289,6 @@ void Simulation::from_system(const std::vector<double>& u_system, std::vector<do
 // the path): sized ahead, so that it is rebuilt a few times over a run (each rebuild is a new
 // condensation) while the Newton systems of the early increments stay small -- the factorization
 // of the near field is most of a plastic run's time and grows as its unknowns^1.5.
-NearField Simulation::near_field_for_depth(double depth) const {
-  const double ahead = std::min(load_case_.max_depth(), 2.0 * depth);
-  NearField near = choose_near_field(load_case_, *mesh_, plan_, true, state_.plastic_zone_growth.at(ahead));
-  near.condensed = true;
-  return near;
-}
-
 // Before an increment to `target`: if the near field does not hold the pilot's plastic zone at
 // that depth (with the margins of choose_near_field), grow it ahead.  Only the load path and the
 // pilot decide, so a run resumed from a checkpoint (which holds state_.near_field) grows it at the same
@@ -460,12 +296,11 @@ NearField Simulation::near_field_for_depth(double depth) const {
 void Simulation::anticipate_plastic_zone(double target) {
   if (!condensation_ || state_.plastic_zone_growth.empty()) return;
   const double depth = std::max(target, state_.deepest);
-  const NearField needed =
-      choose_near_field(load_case_, *mesh_, plan_, true, state_.plastic_zone_growth.at(std::min(depth, load_case_.max_depth())));
+  const NearField needed = near_field_needed(load_case_, *mesh_, plan(), state_.plastic_zone_growth, depth);
   if (needed.elements_x <= state_.near_field.elements_x && needed.elements_y <= state_.near_field.elements_y &&
       needed.contact_nodes <= state_.near_field.contact_nodes)
     return;
-  const NearField ahead = near_field_for_depth(depth);
+  const NearField ahead = near_field_for_depth(load_case_, *mesh_, plan(), state_.plastic_zone_growth, depth);
   state_.near_field.elements_x = std::max(state_.near_field.elements_x, ahead.elements_x);
   state_.near_field.elements_y = std::max(state_.near_field.elements_y, ahead.elements_y);
   state_.near_field.contact_nodes = std::max(state_.near_field.contact_nodes, ahead.contact_nodes);
@@ -668,12 +503,12 @@ std::vector<LayerForce> Simulation::layer_forces() const {
 }
 
 void Simulation::check_fine_zone(double half_width) {
-  if (state_.warned_fine_zone || half_width <= plan_.fine_width) return;
+  if (state_.warned_fine_zone || half_width <= plan().fine_width) return;
   state_.warned_fine_zone = true;
   state_.warnings.push_back(fmt::format(
       "at alpha = {:.4g} m the contact half-width {:.4g} m left the fine mesh zone ({:.4g} m): accuracy drops; "
       "set mesh.contact_half_width or mesh.fine_width larger",
-      state_.alpha, half_width, plan_.fine_width));
+      state_.alpha, half_width, plan().fine_width));
 }
 
 IncrementRecord Simulation::record(double wall_seconds, long iterations, long factorizations, int cutbacks) {

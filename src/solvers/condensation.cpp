@@ -75,6 +75,22 @@ std::size_t schur_block_columns(std::size_t far_unknowns) {
 
 }  // namespace
 
+std::vector<char> near_field_equations(const Mesh& mesh, const std::vector<int>& candidate_equations,
+                                       const NearField& near) {
+  // The near field: all unknowns of the near elements, the vertical unknowns of the candidates.
+  std::vector<char> is_near(static_cast<std::size_t>(mesh.equations()), 0);
+  const int top = mesh.elements_y() - 1;
+  const int columns = std::min(near.elements_x, mesh.elements_x());
+  const int rows = std::min(near.elements_y, mesh.elements_y());
+  for (int ei = 0; ei < columns; ++ei)
+    for (int ej = top - rows + 1; ej <= top; ++ej)
+      for (int dof : mesh.element_dofs(ei, ej))
+        if (mesh.equation(dof) >= 0) is_near[mesh.equation(dof)] = 1;
+  for (std::size_t k = 0; k < candidate_equations.size() && static_cast<int>(k) < near.contact_nodes; ++k)
+    is_near[candidate_equations[k]] = 1;
+  return is_near;
+}
+
 FarFieldCondensation::FarFieldCondensation(const ElasticStiffness& stiffness, const ContactBoundary& contact,
                                            const NearField& near)
     : full_pattern_(stiffness.pattern()), full_values_(stiffness.values()) {
@@ -83,21 +99,15 @@ FarFieldCondensation::FarFieldCondensation(const ElasticStiffness& stiffness, co
   const auto& colptr = full_pattern_.column_start();
   const auto& rowind = full_pattern_.row_index();
 
-  // The near field: all unknowns of the near elements, the vertical unknowns of the candidates.
-  std::vector<char> is_near(n, 0);
-  const int top = mesh.elements_y() - 1;
-  const int columns = std::min(near.elements_x, mesh.elements_x());
-  const int rows = std::min(near.elements_y, mesh.elements_y());
-  for (int ei = 0; ei < columns; ++ei)
-    for (int ej = top - rows + 1; ej <= top; ++ej)
-      for (int dof : mesh.element_dofs(ei, ej))
-        if (mesh.equation(dof) >= 0) is_near[mesh.equation(dof)] = 1;
   std::vector<ContactCandidate> candidates;
+  std::vector<int> candidate_equations;
   for (const ContactCandidate& c : contact.candidates()) {
     if (static_cast<int>(candidates.size()) >= near.contact_nodes) break;  // node i is candidate i
-    is_near[c.equation] = 1;
     candidates.push_back(c);
+    candidate_equations.push_back(c.equation);
   }
+  const std::vector<char> is_near = near_field_equations(mesh, candidate_equations, near);
+  if (is_near.size() != n) throw std::invalid_argument("the near field's mesh is not the stiffness' mesh");
 
   near_of_.assign(n, -1);
   far_of_.assign(n, -1);
@@ -219,6 +229,10 @@ FarFieldCondensation::FarFieldCondensation(const ElasticStiffness& stiffness, co
   }
   contact_ = std::make_unique<ContactBoundary>(contact.punch_shape(), contact.symmetry_factor(), std::move(candidates));
 
+  // The near elements (near_field_equations' columns and rows), as the near system's slots.
+  const int top = mesh.elements_y() - 1;
+  const int columns = std::min(near.elements_x, mesh.elements_x());
+  const int rows = std::min(near.elements_y, mesh.elements_y());
   for (int ei = 0; ei < columns; ++ei)
     for (int ej = top - rows + 1; ej <= top; ++ej) {
       ElementSlot ne;

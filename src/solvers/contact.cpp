@@ -8,14 +8,20 @@
 
 namespace indentsim {
 
+int contact_candidate_count(const Mesh& mesh, const PunchShape& punch) {
+  int count = 0;
+  while (count < mesh.nodes_x() && std::isfinite(punch.surface_height(mesh.x(count)))) ++count;
+  return count;  // beyond the punch's rim: never touched
+}
+
 ContactBoundary::ContactBoundary(const Mesh& mesh, std::shared_ptr<const PunchShape> punch,
                                  const StiffnessPattern& pattern, const std::vector<double>& stiffness_values)
     : punch_(std::move(punch)), symmetry_factor_(mesh.kinematics().symmetry_factor()) {
   const int j = mesh.top_row();
-  for (int i = 0; i < mesh.nodes_x(); ++i) {
+  const int count = contact_candidate_count(mesh, *punch_);
+  for (int i = 0; i < count; ++i) {
     const double x = mesh.x(i);
     const double g = punch_->surface_height(x);
-    if (!std::isfinite(g)) break;  // beyond the punch's rim: never touched
     ContactCandidate c;
     c.node = mesh.node(i, j);
     c.equation = mesh.equation(Mesh::dof_v(c.node));

@@ -15,6 +15,7 @@
 #include "indentsim/base/file_system.hpp"
 #include "indentsim/simulation/increment_snapshot.hpp"
 #include "indentsim/simulation/load_stepping.hpp"
+#include "indentsim/simulation/run_configuration.hpp"
 #include "indentsim/base/phase_times.hpp"
 
 namespace indentsim {
@@ -124,6 +125,8 @@ public:
   /// The estimate of a run built with error_estimate_pending (null: none after all, e.g. its
   /// companions were stopped by a signal).  Must outlive this object.
   void set_error_estimate(const DiscretizationErrorEstimate* error_estimate);
+  /// The run's configuration, every "auto" resolved (summary.json "configuration").
+  void set_configuration(const RunConfiguration& configuration);
   /// How mesh.target_error chose this run's mesh (summary.json "target_error").
   void set_target_choice(const TargetErrorChoice& choice) { target_choice_ = choice; }
   /// A converged increment (Simulation::snapshot): its row, and its fields and tables when due.

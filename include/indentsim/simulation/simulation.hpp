@@ -16,6 +16,7 @@
 #include "indentsim/input/load_case.hpp"
 #include "indentsim/simulation/increment_snapshot.hpp"
 #include "indentsim/simulation/load_stepping.hpp"
+#include "indentsim/simulation/run_configuration.hpp"
 #include "indentsim/simulation/simulation_state.hpp"
 #include "indentsim/materials/material_parameter.hpp"
 #include "indentsim/geometry/mesh.hpp"
@@ -24,23 +25,6 @@
 #include "indentsim/solvers/solver.hpp"
 
 namespace indentsim {
-
-/// The mesh a run uses: planned from the Hertz estimate of the contact, or for a plastic case
-/// from a coarse pilot run of the same case (its contact width and plastic zone); `check` prints
-/// exactly this plan.  `planned_contact_half_width` (a resumed run) skips the pilot.
-struct RunPlan {
-  MeshPlan mesh;
-  PlasticZoneGrowth plastic_zone;  ///< from the pilot, sizes the condensed near field as it grows
-};
-RunPlan plan_run(const LoadCase& load_case, std::optional<double> planned_contact_half_width = std::nullopt);
-
-/// The element a load case gets: mesh.element, or for "auto" B-bar where Q1 would lock (nu >=
-/// 0.45, nearly perfect plasticity, a plastic material under a cone), the paper's Q1 elsewhere.
-ElementKind choose_element(const LoadCase& load_case);
-
-/// Warnings (not errors) about values that run but are probably a slip: E outside 1 kPa - 2 TPa,
-/// alpha / R > 0.05, an estimated contact half-width above 0.1 of lx or ly.
-std::vector<std::string> plausibility_warnings(const LoadCase& load_case, const MeshPlan& plan);
 
 class Simulation {
 public:
@@ -55,10 +39,15 @@ public:
   /// was made first (its companions start from the plan) continues from it.  `times` holds the
   /// phases timed before (planning).
   Simulation(LoadCase load_case, const RunPlan& plan, PhaseTimes times = {});
+  /// A run on a given configuration (a resumed run's: the configuration of the run it continues),
+  /// starting on the near field `start` instead of the configuration's.
+  Simulation(LoadCase load_case, const RunConfiguration& configuration, const NearField& start);
   ~Simulation();
 
   const LoadCase& load_case() const { return load_case_; }
-  const MeshPlan& plan() const { return plan_; }
+  const MeshPlan& plan() const { return config_.plan.mesh; }
+  /// Every choice of the run, "auto" resolved (resolve_choices).
+  const RunConfiguration& configuration() const { return config_; }
   const Mesh& mesh() const { return *mesh_; }
   const ContactBoundary& contact_boundary() const { return *contact_; }
   const BulkModel& bulk() const { return *bulk_; }
@@ -124,7 +113,7 @@ public:
   /// The largest condition estimate of any converged increment's Jacobian so far.
   double largest_condition_estimate() const { return largest_condition_; }
   /// The sparse direct solver chosen for this run (solver.linear, "auto" resolved).
-  LinearSolverKind linear_solver() const { return linear_solver_; }
+  LinearSolverKind linear_solver() const { return config_.linear_solver; }
   /// Warnings raised so far (each once), e.g. a contact zone that left the fine zone.
   const std::vector<std::string>& warnings() const { return state_.warnings; }
   /// The part of the mesh the Newton iterations solve for (condensed or not).
@@ -146,8 +135,9 @@ public:
   const PhaseTimes& times() const { return times_; }
 
 private:
-  /// Builds mesh, laws, contact and the Newton system on `plan`.
-  void build(const RunPlan& plan, const std::optional<NearField>& near_field);
+  /// Builds mesh, laws, contact and the Newton system on `configuration`, on the near field
+  /// `start` if given.
+  void build(const RunConfiguration& configuration, const std::optional<NearField>& start = std::nullopt);
   struct SolveCounters {
     long iterations = 0, factorizations = 0;
   };
@@ -173,10 +163,9 @@ private:
   bool grow_near_field(const std::vector<double>& u, double alpha);
   /// Grows the near field ahead of the pilot's plastic zone before an increment to `target`.
   void anticipate_plastic_zone(double target);
-  NearField near_field_for_depth(double depth) const;
 
   LoadCase load_case_;
-  MeshPlan plan_;
+  RunConfiguration config_;
   std::unique_ptr<Mesh> mesh_;
   std::unique_ptr<StiffnessPattern> pattern_;
   std::unique_ptr<ElasticStiffness> stiffness_;
@@ -197,7 +186,6 @@ private:
   std::vector<double> guess_, system_guess_;  // the trial solution of an increment
   NewtonReport last_report_;
   PhaseTimes times_;
-  LinearSolverKind linear_solver_ = LinearSolverKind::klu;
   double largest_condition_ = 0.0;
 };
 

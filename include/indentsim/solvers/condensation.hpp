@@ -54,6 +54,12 @@ struct PlasticZoneGrowth {
   bool empty() const { return depths.empty(); }
 };
 
+/// The equations a near field holds, as flags over the mesh's equations: every unknown of its
+/// element columns and rows (from the axis and the surface), and the vertical unknowns of its
+/// first contact_nodes contact candidates (`candidate_equations`, from the axis).
+std::vector<char> near_field_equations(const Mesh& mesh, const std::vector<int>& candidate_equations,
+                                       const NearField& near);
+
 class FarFieldCondensation {
 public:
   /// Factors K_FF and forms K_red.  `contact` holds the candidates of the whole mesh; those among

@@ -29,6 +29,10 @@ struct ContactCandidate {
   double tributary_measure = 0.0;  ///< the node's strip of surface (tributary_measure of layer_forces.hpp) [m or m^2]
 };
 
+/// How many surface nodes, from the axis, the punch can touch: those inside its rim (node i is
+/// candidate i).
+int contact_candidate_count(const Mesh& mesh, const PunchShape& punch);
+
 class ContactBoundary {
 public:
   ContactBoundary(const Mesh& mesh, std::shared_ptr<const PunchShape> punch, const StiffnessPattern& pattern,

@@ -1,0 +1,63 @@
+#pragma once
+// The run's configuration: every choice a run makes before its first increment, each "auto" of
+// the load case made concrete, resolved once (resolve_choices).  `check` prints it, summary.json
+// records it ("configuration"), and the Simulation is built on it.
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "indentsim/geometry/element.hpp"
+#include "indentsim/geometry/mesh.hpp"
+#include "indentsim/input/load_case.hpp"
+#include "indentsim/solvers/condensation.hpp"
+#include "indentsim/solvers/solver.hpp"
+
+namespace indentsim {
+
+/// The mesh a run uses: planned from the Hertz estimate of the contact, or for a plastic case
+/// from a coarse pilot run of the same case (its contact width and plastic zone); `check` prints
+/// exactly this plan.  `planned_contact_half_width` (a resumed run) skips the pilot.
+struct RunPlan {
+  MeshPlan mesh;
+  PlasticZoneGrowth plastic_zone;  ///< from the pilot, sizes the condensed near field as it grows
+};
+RunPlan plan_run(const LoadCase& load_case, std::optional<double> planned_contact_half_width = std::nullopt);
+
+struct RunConfiguration {
+  RunPlan plan;                        ///< the mesh (and the pilot's plastic zone)
+  ElementKind element = ElementKind::q1;
+  JacobianChoice jacobian = JacobianChoice::krylov;  ///< krylov, reuse or fresh: never automatic
+  NearField near_field;                ///< what the first increment solves for (it may grow)
+  LinearSolverKind linear_solver = LinearSolverKind::klu;  ///< for every Newton system of the run
+  std::int64_t unknowns = 0;           ///< of the whole mesh
+  std::int64_t system_unknowns = 0;    ///< of the first Newton system (the near field, if condensed)
+  std::vector<int> companion_contact_nodes;  ///< the error estimate's companion runs (none: empty)
+};
+
+/// Every "auto" of `load_case` made concrete on `plan` (no pilot run: plan_run made the plan).
+/// `near_field`, when given, is the near field to start from (a resumed run's): the run then does
+/// not grow it ahead of the pilot's plastic zone (the plan's zone is dropped).
+RunConfiguration resolve_choices(const LoadCase& load_case, const RunPlan& plan,
+                                 const std::optional<NearField>& near_field = std::nullopt);
+/// The configuration as (name, value) lines, in the words of `check` and of summary.json.
+std::vector<std::pair<std::string, std::string>> describe(const RunConfiguration& configuration);
+
+/// The element a load case gets: mesh.element, or for "auto" B-bar where Q1 would lock (nu >=
+/// 0.45, nearly perfect plasticity, a plastic material under a cone), the paper's Q1 elsewhere.
+ElementKind choose_element(const LoadCase& load_case);
+
+/// The near field to solve for at depth `depth` while the pilot's plastic zone grows (`zone`):
+/// condensed, holding the zone at twice the depth (within the load path) with its margins.
+NearField near_field_for_depth(const LoadCase& load_case, const Mesh& mesh, const MeshPlan& plan,
+                               const PlasticZoneGrowth& zone, double depth);
+/// The near field the pilot's zone at `depth` needs (choose_near_field's margins).
+NearField near_field_needed(const LoadCase& load_case, const Mesh& mesh, const MeshPlan& plan,
+                            const PlasticZoneGrowth& zone, double depth);
+
+/// Warnings (not errors) about values that run but are probably a slip: E outside 1 kPa - 2 TPa,
+/// alpha / R > 0.05, an estimated contact half-width above 0.1 of lx or ly.
+std::vector<std::string> plausibility_warnings(const LoadCase& load_case, const MeshPlan& plan);
+
+}  // namespace indentsim

@@ -1,0 +1,259 @@
+#include "indentsim/simulation/run_configuration.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "indentsim/base/error.hpp"
+#include "indentsim/geometry/punch.hpp"
+#include "indentsim/simulation/error_estimate.hpp"
+#include "indentsim/simulation/load_stepping.hpp"
+#include "indentsim/simulation/simulation.hpp"
+#include "indentsim/solvers/contact.hpp"
+
+namespace indentsim {
+
+namespace {
+
+// Measured (CHANGELOG, with Debian's OpenBLAS): CHOLMOD is faster than KLU from the smallest
+// meshes tried (1.6x at 684 unknowns, 2.1x at 1860, 6.2x at 40k); below ~1000 unknowns both take
+// milliseconds and KLU, the user's default, is kept.
+constexpr int cholmod_crossover_unknowns = 1000;
+constexpr double max_relative_contact = 0.1;  // a / lx and a / ly beyond which the run warns
+constexpr double min_plausible_modulus = 1e3, max_plausible_modulus = 2e12;  // [Pa]
+
+// Plastic scenes spread their contact wider than the elastic Hertz estimate, up to the punch's
+// chord sqrt(2 R alpha) when the material flows freely.  A coarse pilot run of the same load
+// case (8 elements across the chord, 4 increments) measures the final contact half-width and
+// how far the plastic zone reaches at each of its increments; the real mesh is planned from the
+// first with a 5% margin, the condensed near field from the second, as it grows with the depth.
+// The pilot sets mesh.contact_half_width itself, so it never runs a pilot of its own, and solves
+// its small mesh whole.  Should it fail, the chord is a safe upper bound and the near field falls
+// back to its default.
+struct PilotResult {
+  double contact_half_width = 0.0;
+  PlasticZoneGrowth plastic_zone;
+};
+
+PilotResult pilot_run(const LoadCase& lc) {
+  const double depth = lc.max_depth();
+  // Where the punch meets the undeformed surface: the sphere's chord sqrt(2 R alpha - alpha^2).
+  const double chord = make_punch(lc.punch)->geometric_contact_radius(depth);
+  LoadCase pilot = lc;
+  pilot.mesh = MeshInput{};
+  pilot.mesh.contact_nodes = 8;
+  pilot.mesh.contact_half_width = chord;
+  pilot.load.path = {0.0, depth};
+  pilot.load.increments = 4;
+  pilot.solver.tolerance = std::max(lc.solver.tolerance, 1e-9);
+  pilot.solver.far_field = FarFieldChoice::full;
+  double widest = 0.0;
+  try {
+    Simulation sim(pilot);
+    PlasticZoneGrowth growth;
+    sim.run([&](const IncrementRecord& r) {
+      widest = std::max(widest, r.half_width);
+      if (r.step == 0) return;
+      const Mesh& mesh = sim.mesh();
+      PlasticExtent zone;
+      for (int ei = 0; ei < mesh.elements_x(); ++ei)
+        for (int ej = 0; ej < mesh.elements_y(); ++ej)
+          for (std::size_t g = 0; g < 4; ++g)
+            if (sim.plasticity()->law().has_yielded(4 * static_cast<std::size_t>(mesh.element(ei, ej)) + g)) {
+              zone.width = std::max(zone.width, mesh.x(ei + 1));
+              zone.depth = std::max(zone.depth, -mesh.y(ej));
+            }
+      growth.depths.push_back(r.alpha);
+      growth.extents.push_back(zone);
+    });
+    return {widest > 0.0 ? std::min(chord, 1.05 * widest) : chord, growth};
+  } catch (const SolverError&) {
+    return {chord, {}};
+  }
+}
+
+// "auto": KLU below the measured crossover, CHOLMOD's supernodal Cholesky above it.
+LinearSolverKind choose_linear_solver(LinearSolverChoice choice, int unknowns) {
+  switch (choice) {
+    case LinearSolverChoice::klu: return LinearSolverKind::klu;
+    case LinearSolverChoice::cholmod: return LinearSolverKind::cholmod;
+    case LinearSolverChoice::automatic: break;
+  }
+  return unknowns >= cholmod_crossover_unknowns ? LinearSolverKind::cholmod : LinearSolverKind::klu;
+}
+
+// Every surface node within 1.3 a + 2 h of the axis may touch (a the planned final contact
+// half-width, h the fine spacing); every element within 1.3 times the pilot's plastic zone plus
+// 2 h (or, without a pilot, within 2.5 a) may yield.  Generous on purpose: a near field too
+// small is detected after the increment and grown (Simulation::grow_near_field), which costs a
+// new condensation; one too large only costs unknowns.  "auto" solves the whole mesh only when the
+// near field would hold more than 80% of its unknowns: measured on deep_plastic.toml, a near field
+// of 55% of the unknowns still cut the time per increment by 40% (docs/DESIGN.md, section 7).
+NearField choose_near_field(const LoadCase& lc, const Mesh& mesh, const MeshPlan& plan, bool plastic,
+                            const std::optional<PlasticExtent>& plastic_zone) {
+  NearField near;
+  if (lc.solver.far_field == FarFieldChoice::full) return near;
+  const double a = plan.contact_half_width_estimate, h = plan.fine_spacing;
+  const double contact_width = 1.3 * a + 2.0 * h;
+  while (near.contact_nodes < mesh.nodes_x() && mesh.x(near.contact_nodes) <= contact_width) ++near.contact_nodes;
+  near.contact_nodes = std::min(mesh.nodes_x(), near.contact_nodes + 1);
+  if (plastic) {
+    const double width = plastic_zone ? std::max(1.3 * plastic_zone->width, contact_width) + 2.0 * h : 2.5 * a;
+    const double depth = plastic_zone ? 1.3 * plastic_zone->depth + 2.0 * h : 2.5 * a;
+    while (near.elements_x < mesh.elements_x() && mesh.x(near.elements_x) < width) ++near.elements_x;
+    while (near.elements_y < mesh.elements_y() && -mesh.y(mesh.top_row() - near.elements_y) < depth) ++near.elements_y;
+    near.contact_nodes = std::max(near.contact_nodes, near.elements_x + 1);
+  }
+  const double near_unknowns = 2.0 * (near.elements_x + 1) * (near.elements_y + 1) + near.contact_nodes;
+  near.condensed = lc.solver.far_field == FarFieldChoice::condense || near_unknowns <= 0.8 * mesh.equations();
+  return near;
+}
+
+}  // namespace
+
+// "auto": the paper's exact Q1 element unless the scene locks it -- nearly incompressible
+// elasticity (nu >= 0.45), nearly perfect plasticity (isochoric flow with kappa > 0.95 or
+// n < 0.1), or a plastic material under a cone, whose strain is set by the angle and not by the
+// depth, so the flow under it is fully plastic and isochoric from the first increment (Q1 locks:
+// on berkovich_cone with Ilyushin's law it overestimates P/h^2 by 1%, with a sawtooth 1.5x as
+// large) -- where mean dilatation (B-bar) is used.
+ElementKind choose_element(const LoadCase& lc) {
+  switch (lc.mesh.element) {
+    case ElementChoice::q1: return ElementKind::q1;
+    case ElementChoice::bbar: return ElementKind::bbar;
+    case ElementChoice::automatic: break;
+  }
+  const auto& m = lc.material;
+  const bool near_incompressible = m.nu >= 0.45;
+  const bool plastic = m.model != MaterialModel::elastic;
+  const bool near_perfect_plasticity =
+      plastic && (m.hardening == HardeningLaw::linear ? m.kappa > 0.95 : m.n < 0.1);
+  const bool sharp_plastic_indentation = plastic && lc.punch.shape == PunchShapeKind::cone;
+  return near_incompressible || near_perfect_plasticity || sharp_plastic_indentation ? ElementKind::bbar
+                                                                                       : ElementKind::q1;
+}
+
+std::vector<std::string> plausibility_warnings(const LoadCase& lc, const MeshPlan& plan) {
+  std::vector<std::string> warnings;
+  // Unit slips: a modulus given in GPa or MPa instead of Pa runs, and gives forces 1e6-1e9 off.
+  if (lc.material.E < min_plausible_modulus || lc.material.E > max_plausible_modulus)
+    warnings.push_back(fmt::format("material.E = {:g} Pa is outside the moduli of solids ({:g} Pa to {:g} Pa): "
+                                   "pascals are meant (210 GPa is 210e9)",
+                                   lc.material.E, min_plausible_modulus, max_plausible_modulus));
+  // The model is small-strain with the gap measured vertically (docs/MODEL.md §3): both need slopes
+  // and depths small against the punch's size.
+  if (auto slope = make_punch(lc.punch)->slope_warning(lc.max_depth())) warnings.push_back(*slope);
+  // A contact that is not small against the specimen: its edges and base shape P well beyond the
+  // discretization error (docs/user-guide.md, "Choosing the specimen").
+  const double a = plan.contact_half_width_estimate;
+  for (const auto& [key, size] : {std::pair<const char*, double>{"geometry.lx", lc.geometry.lx}, {"geometry.ly", lc.geometry.ly}})
+    if (a > max_relative_contact * size)
+      warnings.push_back(fmt::format("the contact half-width (about {:.3g} m) is {:.2g} of {} = {:.3g} m: the "
+                                     "specimen's edges change P far beyond the discretization error (keep a / {} "
+                                     "below {:g}; is punch.radius in metres?)",
+                                     a, a / size, key, size, key, max_relative_contact));
+  return warnings;
+}
+
+RunPlan plan_run(const LoadCase& load_case, std::optional<double> planned_contact_half_width) {
+  RunPlan plan{plan_mesh(load_case), {}};  // also refuses a mesh too large before any work
+  if (planned_contact_half_width) {
+    plan.mesh = plan_mesh(load_case, planned_contact_half_width);
+  } else if (load_case.material.model != MaterialModel::elastic && !load_case.mesh.contact_half_width) {
+    const PilotResult pilot = pilot_run(load_case);
+    plan.mesh = plan_mesh(load_case, pilot.contact_half_width);
+    plan.plastic_zone = pilot.plastic_zone;
+  }
+  return plan;
+}
+
+
+NearField near_field_for_depth(const LoadCase& lc, const Mesh& mesh, const MeshPlan& plan, const PlasticZoneGrowth& zone,
+                               double depth) {
+  const double ahead = std::min(lc.max_depth(), 2.0 * depth);
+  NearField near = choose_near_field(lc, mesh, plan, true, zone.at(ahead));
+  near.condensed = true;
+  return near;
+}
+
+NearField near_field_needed(const LoadCase& lc, const Mesh& mesh, const MeshPlan& plan, const PlasticZoneGrowth& zone,
+                            double depth) {
+  return choose_near_field(lc, mesh, plan, true, zone.at(std::min(depth, lc.max_depth())));
+}
+
+RunConfiguration resolve_choices(const LoadCase& lc, const RunPlan& plan, const std::optional<NearField>& near_field) {
+  RunConfiguration c;
+  c.plan = plan;
+  c.element = choose_element(lc);
+  const bool plastic = lc.material.model != MaterialModel::elastic;
+  // Plastic Newton iterations contract linearly (each moves the yield front across Gauss points
+  // where the tangent jumps), so a factorization kept as GMRES's preconditioner serves several of
+  // them; elastic contact converges in two or three exact steps on a small condensed system.
+  c.jacobian = lc.solver.jacobian == JacobianChoice::automatic ? (plastic ? JacobianChoice::krylov : JacobianChoice::reuse)
+                                                               : lc.solver.jacobian;
+  const Mesh mesh = Mesh::from_plan(lc, plan.mesh);  // coordinates and numbering only: cheap
+  if (near_field) {
+    c.near_field = *near_field;
+    c.plan.plastic_zone = {};
+  } else if (plan.plastic_zone.empty()) {
+    c.near_field = choose_near_field(lc, mesh, plan.mesh, plastic, std::nullopt);
+  } else {
+    // Whether to condense is decided on the zone of the deepest point; the near field starts as
+    // large as the first increments need and grows with the zone (Simulation::anticipate_plastic_zone).
+    c.near_field = choose_near_field(lc, mesh, plan.mesh, true, plan.plastic_zone.at(lc.max_depth()));
+    if (c.near_field.condensed) {
+      const std::vector<double> targets = plan_increments(lc.load);
+      const auto first = std::find_if(targets.begin(), targets.end(), [](double t) { return t > 0.0; });
+      if (first != targets.end()) c.near_field = near_field_for_depth(lc, mesh, plan.mesh, plan.plastic_zone, *first);
+    }
+  }
+  c.unknowns = mesh.equations();
+  c.system_unknowns = c.unknowns;
+  if (c.near_field.condensed) {
+    const int candidates = contact_candidate_count(mesh, *make_punch(lc.punch));
+    std::vector<int> candidate_equations;
+    for (int i = 0; i < candidates; ++i)
+      candidate_equations.push_back(mesh.equation(Mesh::dof_v(mesh.node(i, mesh.top_row()))));
+    const std::vector<char> near = near_field_equations(mesh, candidate_equations, c.near_field);
+    c.system_unknowns = std::count(near.begin(), near.end(), char{1});
+  }
+  c.linear_solver = choose_linear_solver(lc.solver.linear, static_cast<int>(c.system_unknowns));
+  if (lc.mesh.error_estimate != ErrorEstimateChoice::off && !error_estimate_unavailable(lc)) {
+    c.companion_contact_nodes.push_back(lc.mesh.contact_nodes / 2);
+    if (lc.mesh.error_estimate == ErrorEstimateChoice::observed) c.companion_contact_nodes.push_back(lc.mesh.contact_nodes / 4);
+  }
+  return c;
+}
+
+std::vector<std::pair<std::string, std::string>> describe(const RunConfiguration& c) {
+  const MeshPlan& p = c.plan.mesh;
+  std::string companions = "none";
+  for (std::size_t k = 0; k < c.companion_contact_nodes.size(); ++k)
+    companions = (k ? companions + ", " : std::string()) + std::to_string(c.companion_contact_nodes[k]);
+  const auto jacobian = [&] {
+    switch (c.jacobian) {
+      case JacobianChoice::krylov: return "krylov";
+      case JacobianChoice::reuse: return "reuse";
+      case JacobianChoice::fresh: return "fresh";
+      case JacobianChoice::automatic: break;
+    }
+    return "auto";
+  };
+  return {
+      {"mesh", fmt::format("{} x {} nodes, {} unknowns", p.nodes_x, p.nodes_y, c.unknowns)},
+      {"contact_half_width", fmt::format("{:.6g} m{}", p.contact_half_width_estimate,
+                                         c.plan.plastic_zone.empty() ? "" : " (from the pilot run)")},
+      {"element", c.element == ElementKind::bbar ? "bbar" : "q1"},
+      {"far_field", c.near_field.condensed
+                        ? fmt::format("condensed: near field of {} contact nodes, {} x {} elements, {} unknowns",
+                                      c.near_field.contact_nodes, c.near_field.elements_x, c.near_field.elements_y,
+                                      c.system_unknowns)
+                        : std::string("full (the whole mesh is solved)")},
+      {"linear_solver", c.linear_solver == LinearSolverKind::cholmod ? "cholmod" : "klu"},
+      {"jacobian", jacobian()},
+      {"companion_runs", companions == "none" ? companions : "contact_nodes = " + companions},
+  };
+}
+
+}  // namespace indentsim
