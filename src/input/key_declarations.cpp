@@ -1,0 +1,370 @@
+#include "key_declarations.hpp"
+
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "indentsim/base/version.hpp"
+
+namespace indentsim {
+
+namespace input_detail {
+
+// The declarations, section by section in the order case.toml shows them.
+template <class Access>
+KeyDeclaration number_key(KeyDeclaration k, Access access) {
+  const std::string section = k.section, name = k.name;
+  k.read = [=](const Reader& r, LoadCase& lc) { r.read_number(section, name, access(lc)); };
+  k.write = [=](const LoadCase& lc) -> std::optional<std::string> { return toml_number(access(lc)); };
+  return k;
+}
+template <class Access>
+KeyDeclaration optional_number_key(KeyDeclaration k, Access access) {
+  const std::string section = k.section, name = k.name;
+  k.read = [=](const Reader& r, LoadCase& lc) { r.read_optional_number(section, name, access(lc)); };
+  k.write = [=](const LoadCase& lc) -> std::optional<std::string> {
+    const auto& value = access(lc);
+    if (!value) return std::nullopt;
+    return toml_number(*value);
+  };
+  return k;
+}
+template <class Access>
+KeyDeclaration integer_key(KeyDeclaration k, Access access) {
+  const std::string section = k.section, name = k.name;
+  k.read = [=](const Reader& r, LoadCase& lc) { r.read_integer(section, name, access(lc)); };
+  k.write = [=](const LoadCase& lc) -> std::optional<std::string> { return std::to_string(access(lc)); };
+  return k;
+}
+template <class Access>
+KeyDeclaration numbers_key(KeyDeclaration k, Access access) {
+  const std::string section = k.section, name = k.name;
+  k.read = [=](const Reader& r, LoadCase& lc) { r.read_number_array(section, name, access(lc)); };
+  k.write = [=](const LoadCase& lc) -> std::optional<std::string> { return toml_numbers(access(lc)); };
+  return k;
+}
+template <class E, std::size_t N, class Access>
+KeyDeclaration choice_key(KeyDeclaration k, const Choice<E> (&names)[N], Access access) {
+  const std::string section = k.section, name = k.name;
+  const Choice<E>* words = names;
+  std::vector<std::string> accepted;
+  for (std::size_t i = 0; i < N; ++i) accepted.emplace_back(fmt::format("\"{}\"", names[i].name));
+  k.range = "one of " + join(accepted);
+  k.read = [=](const Reader& r, LoadCase& lc) { r.read_choice(section, name, words, N, access(lc)); };
+  k.write = [=](const LoadCase& lc) -> std::optional<std::string> {
+    for (std::size_t i = 0; i < N; ++i)
+      if (words[i].value == access(lc)) return fmt::format("\"{}\"", words[i].name);
+    return std::nullopt;
+  };
+  return k;
+}
+
+const std::vector<KeyDeclaration>& key_declarations() {
+  static const std::vector<KeyDeclaration> keys = [] {
+    std::vector<KeyDeclaration> k;
+    k.push_back(choice_key({"geometry", "kind", "choice", "", "",
+                            "plane_strain (a long punch on a block, P per unit thickness in N/m), axisymmetric (a "
+                            "punch of revolution on a cylindrical specimen, P in N)"},
+                           scene_names, [](auto& c) -> auto& { return c.geometry.kind; }));
+    k.push_back(number_key({"geometry", "lx", "number", "> 0", "m",
+                            "half width of the block (plane strain: the model is the half x >= 0 of a symmetric block); "
+                            "the specimen's radius in axisymmetry (its outer side free)",
+                            true},
+                           [](auto& c) -> auto& { return c.geometry.lx; }));
+    k.push_back(number_key({"geometry", "ly", "number", "> 0, > the deepest depth", "m",
+                            "depth of the block, height of the specimen (its base is clamped)", true},
+                           [](auto& c) -> auto& { return c.geometry.ly; }));
+    k.push_back(choice_key({"punch", "shape", "choice", "", "",
+                            "sphere (circular profile of radius R: a sphere in axisymmetry, a cylinder in plane "
+                            "strain; \"cylinder\" is a synonym), cone (a wedge in plane strain), flat (flat-ended), "
+                            "profile (a measured tip)"},
+                           shape_names, [](auto& c) -> auto& { return c.punch.shape; }));
+    {
+      KeyDeclaration radius{"punch", "radius", "number", "> 0, > the deepest depth (sphere)", "m",
+                            "sphere and flat: the punch radius R (required for them, refused for other shapes)"};
+      radius.read = [](const Reader& r, LoadCase& lc) { r.read_number("punch", "radius", lc.punch.radius); };
+      radius.write = [](const LoadCase& lc) -> std::optional<std::string> {
+        if (lc.punch.shape != PunchShapeKind::sphere && lc.punch.shape != PunchShapeKind::flat) return std::nullopt;
+        return toml_number(lc.punch.radius);
+      };
+      k.push_back(radius);
+    }
+    {
+      KeyDeclaration angle{"punch", "half_angle", "number", "(0, 90)", "degrees",
+                           "cone: angle between axis and face (70.3: Berkovich- and Vickers-equivalent; required for "
+                           "the cone)"};
+      angle.read = [](const Reader& r, LoadCase& lc) { r.read_number("punch", "half_angle", lc.punch.half_angle); };
+      angle.write = [](const LoadCase& lc) -> std::optional<std::string> {
+        if (lc.punch.shape != PunchShapeKind::cone) return std::nullopt;
+        return toml_number(lc.punch.half_angle);
+      };
+      k.push_back(angle);
+    }
+    {
+      KeyDeclaration tip{"punch", "tip_radius", "number", ">= 0, cap within the specimen", "m",
+                         "cone: radius of the spherical cap tangent to the face (a blunt tip; 0 = sharp)"};
+      tip.read = [](const Reader& r, LoadCase& lc) { r.read_number("punch", "tip_radius", lc.punch.tip_radius); };
+      tip.write = [](const LoadCase& lc) -> std::optional<std::string> {
+        if (lc.punch.shape != PunchShapeKind::cone) return std::nullopt;
+        return toml_number(lc.punch.tip_radius);
+      };
+      k.push_back(tip);
+    }
+    {
+      KeyDeclaration file{"punch", "profile", "string", "a CSV file of r, g(r)", "m",
+                          "profile: a measured tip, rows r, g(r) from r = 0, g(0) = 0, r increasing, g not "
+                          "decreasing (a header row is allowed); relative to the load case's folder"};
+      file.read = [](const Reader& r, LoadCase& lc) { r.read_string("punch", "profile", lc.punch.profile_file); };
+      file.write = [](const LoadCase& lc) -> std::optional<std::string> {
+        if (lc.punch.shape != PunchShapeKind::profile || lc.punch.profile_file.empty()) return std::nullopt;
+        std::ostringstream text;
+        text << toml::value<std::string>(lc.punch.profile_file);
+        return text.str() + " read into profile_points";
+      };
+      file.derived = true;  // case.toml holds the points themselves: a resumed run needs no file
+      k.push_back(file);
+    }
+    {
+      KeyDeclaration points{"punch", "profile_points", "array of [r, g] pairs", "as punch.profile", "m",
+                            "profile: the tip's points inline, instead of punch.profile (case.toml writes them so)"};
+      points.read = [](const Reader& r, LoadCase& lc) { r.read_points("punch", "profile_points", lc.punch.profile); };
+      points.write = [](const LoadCase& lc) -> std::optional<std::string> {
+        if (lc.punch.shape != PunchShapeKind::profile) return std::nullopt;
+        std::string text = "[";
+        for (std::size_t i = 0; i < lc.punch.profile.size(); ++i)
+          text += fmt::format("{}[{}, {}]", i ? ", " : "", toml_number(lc.punch.profile[i].first),
+                              toml_number(lc.punch.profile[i].second));
+        return text + "]";
+      };
+      k.push_back(points);
+    }
+    k.push_back(choice_key({"material", "model", "choice", "", "",
+                            "elastic; ilyushin (deformation theory, the paper's); j2 (flow theory)", true},
+                           model_names, [](auto& c) -> auto& { return c.material.model; }));
+    k.push_back(number_key({"material", "E", "number", "[1e-100, 1e100]", "Pa", "Young's modulus", true},
+                           [](auto& c) -> auto& { return c.material.E; }));
+    k.push_back(number_key({"material", "nu", "number", "(-1, 0.5)", "", "Poisson's ratio", true},
+                           [](auto& c) -> auto& { return c.material.nu; }));
+    k.push_back(number_key({"material", "e0", "number", "(0, 1)", "",
+                            "elastic limit of the strain intensity e_u; the uniaxial yield stress is sigma_y = 3 mu e0 "
+                            "= E e0 3 / (2 (1 + nu)) (give e0 or yield_stress, not both)"},
+                           [](auto& c) -> auto& { return c.material.e0; }));
+    {
+      KeyDeclaration ys{"material", "yield_stress", "number", "> 0", "Pa",
+                        "uniaxial yield stress sigma_y, instead of e0 (e0 = sigma_y / (3 mu))"};
+      ys.read = [](const Reader& r, LoadCase& lc) { r.read_optional_number("material", "yield_stress", lc.material.yield_stress); };
+      ys.write = [](const LoadCase& lc) -> std::optional<std::string> {
+        return toml_number(lc.material.yield_stress.value_or(yield_stress_of_e0(lc.material.e0, lc.material.E, lc.material.nu)));
+      };
+      ys.derived = true;
+      k.push_back(ys);
+    }
+    k.push_back(choice_key({"material", "hardening", "choice", "", "",
+                            "linear: omega = kappa (1 - e0/e_u); power: omega = 1 - (e0/e_u)^(1-n)"},
+                           hardening_names, [](auto& c) -> auto& { return c.material.hardening; }));
+    k.push_back(number_key({"material", "kappa", "number", "[0, 1)", "",
+                            "linear law: post-yield slope of sigma_u(e_u) is (1 - kappa) 3 mu"},
+                           [](auto& c) -> auto& { return c.material.kappa; }));
+    k.push_back(number_key({"material", "n", "number", "(0, 1)", "", "power law: sigma_u grows as e_u^n beyond e0"},
+                           [](auto& c) -> auto& { return c.material.n; }));
+    k.push_back(numbers_key({"load", "path", "array of numbers", "from 0, each >= 0", "m",
+                             "depth waypoints alpha, piecewise linear; may go down (unload, separate) and up again", true},
+                            [](auto& c) -> auto& { return c.load.path; }));
+    {
+      KeyDeclaration inc{"load", "increments", "integer or array of integers", "[1, 1e7] in all", "",
+                         "increments along the whole path (spread by path length), or one count per segment", true};
+      inc.read = [](const Reader& r, LoadCase& lc) { r.read_increments(lc.load); };
+      inc.write = [](const LoadCase& lc) -> std::optional<std::string> {
+        if (lc.load.segment_increments.empty()) return std::to_string(lc.load.increments);
+        std::string text = "[";
+        for (std::size_t i = 0; i < lc.load.segment_increments.size(); ++i)
+          text += fmt::format("{}{}", i ? ", " : "", lc.load.segment_increments[i]);
+        return text + "]";
+      };
+      k.push_back(inc);
+    }
+    k.push_back(choice_key({"mesh", "element", "choice", "", "",
+                            "q1 (the paper's exact element), bbar (mean dilatation, locking-free), auto (B-bar when "
+                            "nu >= 0.45 or kappa > 0.95 or n < 0.1, or a plastic material under a cone)"},
+                           element_names, [](auto& c) -> auto& { return c.mesh.element; }));
+    k.push_back(integer_key({"mesh", "contact_nodes", "integer", ">= 2", "",
+                             "fine-zone elements across the estimated final contact half-width (raise it to buy "
+                             "accuracy); 30 under a cone"},
+                            [](auto& c) -> auto& { return c.mesh.contact_nodes; }));
+    k.push_back(optional_number_key({"mesh", "contact_half_width", "number", "> 0", "m",
+                                     "override of the estimate a* that sizes the mesh (default: Hertz, or a pilot run)"},
+                                    [](auto& c) -> auto& { return c.mesh.contact_half_width; }));
+    k.push_back(optional_number_key({"mesh", "fine_width", "number", "> 0", "m", "override: width of the uniform zone (default 1.5 a*)"},
+                                    [](auto& c) -> auto& { return c.mesh.fine_width; }));
+    k.push_back(optional_number_key({"mesh", "fine_depth", "number", "> 0", "m", "override: depth of the uniform zone (default 1.5 a*)"},
+                                    [](auto& c) -> auto& { return c.mesh.fine_depth; }));
+    k.push_back(optional_number_key({"mesh", "growth", "number", "[1, 2]", "",
+                                     "override: growth ratio of the far field (default 1 + 2.5 / contact_nodes)"},
+                                    [](auto& c) -> auto& { return c.mesh.growth; }));
+    k.push_back(choice_key({"mesh", "error_estimate", "choice", "", "",
+                            "richardson: a companion run at half the contact_nodes gives each increment's "
+                            "discretization error of P and a (curve.csv, summary.json); observed: a second one at "
+                            "a quarter measures the order; off"},
+                           error_estimate_names, [](auto& c) -> auto& { return c.mesh.error_estimate; }));
+    k.push_back(optional_number_key({"mesh", "target_error", "number", "[1e-5, 0.1]", "",
+                                     "relative error of the final P asked for: the run chooses contact_nodes from a "
+                                     "pilot, checks its estimate and refines once if it was missed"},
+                                    [](auto& c) -> auto& { return c.mesh.target_error; }));
+    {
+      KeyDeclaration dir{"output", "dir", "string", "not empty", "", "output folder (relative to the working directory)"};
+      dir.read = [](const Reader& r, LoadCase& lc) { r.read_string("output", "dir", lc.output.dir); };
+      dir.write = [](const LoadCase& lc) -> std::optional<std::string> {
+        std::ostringstream text;
+        text << toml::value<std::string>(lc.output.dir);
+        return text.str();
+      };
+      k.push_back(dir);
+    }
+    k.push_back(integer_key({"output", "fields_every", "integer", ">= 0", "",
+                             "write a VTU every N increments (0: the final state only)"},
+                            [](auto& c) -> auto& { return c.output.fields_every; }));
+    k.push_back(numbers_key({"output", "profile_depths", "array of numbers", "within [0, ly]", "m",
+                             "depths of the stress profiles besides the surface"},
+                            [](auto& c) -> auto& { return c.output.profile_depths; }));
+    k.push_back(integer_key({"output", "checkpoint_every", "integer", ">= 0", "",
+                             "checkpoint at increments numbered a multiple of N, at every peak and valley and at the "
+                             "end (0: reversals and signals only)"},
+                            [](auto& c) -> auto& { return c.output.checkpoint_every; }));
+    {
+      KeyDeclaration keep{"output", "keep_checkpoints", "integer or \"all\"", ">= 1", "",
+                          "newest checkpoints kept; every peak's and valley's are kept besides"};
+      keep.read = [](const Reader& r, LoadCase& lc) { r.read_count_or_all("output", "keep_checkpoints", lc.output.keep_checkpoints); };
+      keep.write = [](const LoadCase& lc) -> std::optional<std::string> {
+        return lc.output.keep_checkpoints == 0 ? std::string("\"all\"") : std::to_string(lc.output.keep_checkpoints);
+      };
+      k.push_back(keep);
+    }
+    k.push_back(numbers_key({"analysis", "fit_range", "array of two numbers", "0 <= lower < upper <= 1", "",
+                             "the unloading fit P = B (h - h_f)^m uses the points with lower P_max <= P <= upper "
+                             "P_max (ISO 14577 practice: 20% to 98%)"},
+                            [](auto& c) -> auto& { return c.analysis.fit_range; }));
+    k.push_back(optional_number_key({"analysis", "epsilon", "number", "(0, 1]", "",
+                                     "h_c = h_max - epsilon P_max / S (default 0.75 sphere and profile, 0.72 cone, "
+                                     "1 flat)"},
+                                    [](auto& c) -> auto& { return c.analysis.epsilon; }));
+    k.push_back(number_key({"analysis", "beta", "number", "[1, 1.2]", "",
+                            "E_r = sqrt(pi) / (2 beta) S / sqrt(A_c) (1 for a body of revolution, 1.034 for a "
+                            "Berkovich pyramid)"},
+                           [](auto& c) -> auto& { return c.analysis.beta; }));
+    k.push_back(optional_number_key({"analysis", "indenter_E", "number", "> 0", "Pa",
+                                     "the indenter's Young's modulus for the specimen modulus (default: rigid; "
+                                     "diamond 1141e9)"},
+                                    [](auto& c) -> auto& { return c.analysis.indenter_E; }));
+    k.push_back(number_key({"analysis", "indenter_nu", "number", "(-1, 0.5)", "", "the indenter's Poisson's ratio"},
+                           [](auto& c) -> auto& { return c.analysis.indenter_nu; }));
+    k.push_back(number_key({"solver", "tolerance", "number", "[1e-14, 1e-2)", "",
+                            "residual max-norm relative to E* times the deepest depth (times 2 pi a* in axisymmetry: ring forces)"},
+                           [](auto& c) -> auto& { return c.solver.tolerance; }));
+    k.push_back(integer_key({"solver", "max_newton", "integer", "[1, 1000]", "", "Newton iterations per attempt"},
+                            [](auto& c) -> auto& { return c.solver.max_newton; }));
+    k.push_back(integer_key({"solver", "max_cutbacks", "integer", "[0, 60]", "", "halvings of one increment before the run stops"},
+                            [](auto& c) -> auto& { return c.solver.max_cutbacks; }));
+    k.push_back(choice_key({"solver", "linear", "choice", "", "",
+                            "klu (SuiteSparse KLU), cholmod (supernodal Cholesky), auto (CHOLMOD above 1000 unknowns "
+                            "of the Newton system)"},
+                           linear_names, [](auto& c) -> auto& { return c.solver.linear; }));
+    k.push_back(choice_key({"solver", "far_field", "choice", "", "",
+                            "condense (Newton solves the near field, the elastic far field condensed exactly), full "
+                            "(the whole mesh), auto (condense unless the near field is over 80% of the unknowns)"},
+                           far_field_names, [](auto& c) -> auto& { return c.solver.far_field; }));
+    k.push_back(choice_key({"solver", "jacobian", "choice", "", "",
+                            "how a Newton iteration solves its linear system: krylov (GMRES preconditioned by a "
+                            "factorization kept across the iterations), reuse (a factorization per iteration; a "
+                            "converging one may keep the last), fresh (factor every iteration), auto (krylov for a "
+                            "plastic specimen, reuse for an elastic one)"},
+                           jacobian_names, [](auto& c) -> auto& { return c.solver.jacobian; }));
+    return k;
+  }();
+  return keys;
+}
+
+}  // namespace input_detail
+
+using namespace input_detail;
+
+std::string toml_number(double value) {
+  std::string text = fmt::format("{}", value);
+  if (text.find_first_of(".eEn") == std::string::npos) text += ".0";  // "15" would read as an integer
+  return text;
+}
+
+std::string toml_string(const std::string& s) {
+  std::string quoted = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') quoted += std::string("\\") + c;
+    else if (c == '\n') quoted += "\\n";
+    else if (c == '\t') quoted += "\\t";
+    else if (c == '\r') quoted += "\\r";
+    else if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) quoted += fmt::format("\\u{:04X}", static_cast<unsigned char>(c));
+    else quoted += c;
+  }
+  return quoted + "\"";
+}
+
+std::string to_toml(const LoadCase& lc) {
+  std::string t = fmt::format("# The load case as run (from {}), every key explicit.\n# Written by {}.\n",
+                              printable(lc.source, 400), version_line());
+  std::string section;
+  for (const auto& key : key_declarations()) {
+    if (section != key.section) {
+      t += fmt::format("{}[{}]\n", section.empty() ? "" : "\n", key.section);
+      section = key.section;
+    }
+    const std::optional<std::string> value = key.write(lc);
+    if (!value) continue;
+    if (key.derived) t += fmt::format("# {} = {}  ({}: derived, shown for reference)\n", key.name, *value, key.unit);
+    else t += fmt::format("{} = {}\n", key.name, *value);
+  }
+  return t;
+}
+
+std::string keys_markdown() {
+  std::string t = "| key | type | default | accepted | unit | meaning |\n|---|---|---|---|---|---|\n";
+  for (const auto& k : describe_keys()) {
+    const auto cell = [](std::string text) {
+      std::string out;
+      for (char c : text) out += c == '|' ? std::string("\\|") : std::string(1, c);
+      return out;
+    };
+    t += fmt::format("| `{}` | {} | {} | {} | {} | {} |\n", k.key, cell(k.type),
+                     k.required ? "required" : "`" + cell(k.default_value) + "`", cell(k.range), k.unit.empty() ? "" : k.unit,
+                     cell(k.help));
+  }
+  return t;
+}
+
+std::vector<KeyDescription> describe_keys() {
+  const LoadCase defaults;
+  std::vector<KeyDescription> out;
+  for (const auto& key : key_declarations()) {
+    KeyDescription d;
+    d.key = std::string(key.section) + "." + key.name;
+    d.type = key.type;
+    d.range = key.range;
+    d.unit = key.unit;
+    d.help = key.help;
+    d.required = key.required;
+    if (key.required) d.default_value = "required";
+    else if (key.derived) d.default_value = "from e0";
+    else d.default_value = key.write(defaults).value_or("(computed)");
+    out.push_back(d);
+  }
+  return out;
+}
+
+std::string first_physics_difference(const LoadCase& a, const LoadCase& b) {
+  for (const auto& key : key_declarations()) {
+    const std::string section = key.section;
+    if (section != "geometry" && section != "punch" && section != "material" && section != "mesh") continue;
+    if (key.derived) continue;
+    if (key.write(a) != key.write(b)) return section + "." + key.name;
+  }
+  return "";
+}
+
+}  // namespace indentsim

@@ -1,0 +1,197 @@
+#include "indentsim/input/load_case.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "indentsim/base/error.hpp"
+#include "key_declarations.hpp"
+
+namespace indentsim {
+
+namespace {
+
+constexpr double min_modulus = 1e-100, max_modulus = 1e100;  // material.E [Pa]
+
+}  // namespace
+
+using namespace input_detail;
+
+/// A tip profile: r from 0 strictly increasing, g from 0 not decreasing, all finite; with a load
+/// path (`within_run`), high enough that the deepest depth stays on it and within the specimen.
+void validate_profile(const LoadCase& lc, bool within_run) {
+  const auto& points = lc.punch.profile;
+  const bool from_file = !lc.punch.profile_file.empty();
+  const std::string key = from_file ? "punch.profile" : "punch.profile_points";
+  const auto fail = [&](std::size_t k, const std::string& problem) {
+    throw InputError(lc.source, key,
+                     fmt::format("{}point {} {}", from_file ? printable(lc.punch.profile_file, 200) + ": " : "", k + 1,
+                                 problem));
+  };
+  if (points.size() < 2) throw InputError(lc.source, key, "a profile needs at least 2 points (r, g)");
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    const auto [r, g] = points[k];
+    if (!std::isfinite(r) || !std::isfinite(g)) fail(k, "is not finite");
+    if (k == 0 && (r != 0.0 || g != 0.0))
+      fail(k, fmt::format("is ({}, {}): the profile must start at the tip, r = 0, g = 0", r, g));
+    if (k > 0 && !(r > points[k - 1].first))
+      fail(k, fmt::format("has r = {} after r = {}: r must increase", r, points[k - 1].first));
+    if (k > 0 && g < points[k - 1].second)
+      fail(k, fmt::format("has g = {} after g = {}: the profile must not descend (not monotone)", g,
+                          points[k - 1].second));
+  }
+  if (!within_run) return;
+  if (!(points.back().second > lc.max_depth()))
+    throw InputError(lc.source, key,
+                     fmt::format("the profile rises only {} m, not above the deepest depth {} m: the specimen would "
+                                 "reach beyond the measured tip",
+                                 points.back().second, lc.max_depth()));
+  if (!(points.back().first < lc.geometry.lx))
+    throw InputError(lc.source, key, fmt::format("reaches r = {} m, beyond the specimen (geometry.lx = {} m)",
+                                                 points.back().first, lc.geometry.lx));
+}
+
+namespace input_detail {
+
+/// The indenter on its own: what its shape needs, whatever specimen it meets.
+void validate_punch_shape(const LoadCase& lc) {
+  const auto& punch = lc.punch;
+  if ((punch.shape == PunchShapeKind::sphere || punch.shape == PunchShapeKind::flat) && !(punch.radius > 0.0))
+    throw InputError(lc.source, "punch.radius", fmt::format("must be > 0 (got {})", punch.radius));
+  if (punch.shape == PunchShapeKind::cone) {
+    if (!(punch.half_angle > 0.0 && punch.half_angle < 90.0))
+      throw InputError(lc.source, "punch.half_angle",
+                       fmt::format("must lie in (0, 90) degrees, the angle between axis and face (got {})",
+                                   punch.half_angle));
+    if (!(punch.tip_radius >= 0.0))
+      throw InputError(lc.source, "punch.tip_radius", fmt::format("must be >= 0 (got {})", punch.tip_radius));
+  }
+  if (punch.shape == PunchShapeKind::profile) validate_profile(lc, false);
+}
+
+void validate_analysis(const LoadCase& lc) {
+  const auto fail = [&](const std::string& key, const std::string& problem) {
+    throw InputError(lc.source, key, problem);
+  };
+  const auto& fit = lc.analysis.fit_range;
+  if (fit.size() != 2 || !(fit[0] >= 0.0 && fit[0] < fit[1] && fit[1] <= 1.0))
+    fail("analysis.fit_range", "must be two fractions of P_max, 0 <= lower < upper <= 1 (for example [0.2, 0.98])");
+  if (lc.analysis.epsilon && !(*lc.analysis.epsilon > 0.0 && *lc.analysis.epsilon <= 1.0))
+    fail("analysis.epsilon", fmt::format("must lie in (0, 1] (got {})", *lc.analysis.epsilon));
+  if (!(lc.analysis.beta >= 1.0 && lc.analysis.beta <= 1.2))
+    fail("analysis.beta", fmt::format("must lie in [1, 1.2] (got {})", lc.analysis.beta));
+  if (lc.analysis.indenter_E && !(*lc.analysis.indenter_E > 0.0))
+    fail("analysis.indenter_E", fmt::format("must be > 0 (got {})", *lc.analysis.indenter_E));
+  if (!(lc.analysis.indenter_nu > -1.0 && lc.analysis.indenter_nu < 0.5))
+    fail("analysis.indenter_nu", fmt::format("must lie in (-1, 0.5) (got {})", lc.analysis.indenter_nu));
+}
+
+}  // namespace input_detail
+
+void validate(const LoadCase& lc) {
+  const auto fail = [&](const std::string& key, const std::string& problem) {
+    throw InputError(lc.source, key, problem);
+  };
+  const auto positive = [&](const std::string& key, double value) {
+    if (!(value > 0.0)) fail(key, fmt::format("must be > 0 (got {})", value));
+  };
+  positive("geometry.lx", lc.geometry.lx);
+  positive("geometry.ly", lc.geometry.ly);
+  const auto& punch = lc.punch;
+  const bool has_radius = punch.shape == PunchShapeKind::sphere || punch.shape == PunchShapeKind::flat;
+  validate_punch_shape(lc);
+  if (punch.shape == PunchShapeKind::flat && !(punch.radius < lc.geometry.lx))
+    fail("punch.radius", fmt::format("the flat punch ({} m) is not narrower than the specimen (geometry.lx = {} m)",
+                                     punch.radius, lc.geometry.lx));
+  if (punch.shape == PunchShapeKind::cone) {
+    const double cap = punch.tip_radius * std::cos(punch.half_angle * std::acos(-1.0) / 180.0);
+    if (!(cap < lc.geometry.lx))
+      fail("punch.tip_radius", fmt::format("the spherical cap of radius {} m meets the face at r = {:.4g} m, beyond "
+                                           "the specimen (geometry.lx = {} m): it does not fit",
+                                           punch.tip_radius, cap, lc.geometry.lx));
+  }
+  if (punch.shape == PunchShapeKind::profile && !lc.load.path.empty()) validate_profile(lc, true);
+  positive("material.E", lc.material.E);
+  // Stresses and forces are E times O(1) numbers and their squares are formed (norms, J2); beyond
+  // these bounds double precision cannot hold them.  Plausible moduli are warned about, not here.
+  if (!(lc.material.E >= min_modulus && lc.material.E <= max_modulus))
+    fail("material.E", fmt::format("{} Pa is outside [{:g}, {:g}] Pa, beyond what double precision can solve "
+                                   "(the results scale with E: use SI units, pascals)",
+                                   lc.material.E, min_modulus, max_modulus));
+  if (!(lc.material.nu > -1.0 && lc.material.nu < 0.5))
+    fail("material.nu", fmt::format("must lie in (-1, 0.5) (got {})", lc.material.nu));
+  // Every key given is checked, whatever the model uses: a case that is switched to another model
+  // later must not carry a value that was never valid.
+  positive("material.e0", lc.material.e0);
+  if (!(lc.material.e0 < 1.0)) fail("material.e0", fmt::format("must lie in (0, 1): a strain (got {})", lc.material.e0));
+  if (!(lc.material.kappa >= 0.0 && lc.material.kappa < 1.0))
+    fail("material.kappa", fmt::format("must lie in [0, 1) (got {})", lc.material.kappa));
+  if (!(lc.material.n > 0.0 && lc.material.n < 1.0))
+    fail("material.n", fmt::format("must lie in (0, 1) (got {})", lc.material.n));
+
+  const auto& path = lc.load.path;
+  if (path.size() < 2) fail("load.path", "needs at least two waypoints, starting at 0");
+  if (path.front() != 0.0) fail("load.path", fmt::format("must start at 0 (got {})", path.front()));
+  for (std::size_t i = 0; i < path.size(); ++i)
+    if (path[i] < 0.0) fail("load.path", fmt::format("waypoint {} is a negative depth ({})", i, path[i]));
+  if (!(lc.max_depth() > 0.0)) fail("load.path", "never indents: every waypoint is 0");
+  // The gap g(x) = R - sqrt(R^2 - x^2) and the displacements are resolved against R and the
+  // block in double precision: a depth below 1e-9 of them is round-off, not an indentation.
+  const double resolvable = 1e-9 * std::max(has_radius ? lc.punch.radius : 0.0, lc.geometry.ly);
+  if (lc.max_depth() < resolvable)
+    fail("load.path", fmt::format("the deepest depth {:g} m is below what double precision resolves against the "
+                                  "punch radius and the block ({:g} m, 1e-9 of them)",
+                                  lc.max_depth(), resolvable));
+  if (punch.shape == PunchShapeKind::sphere && lc.max_depth() >= lc.punch.radius)
+    fail("load.path", fmt::format("depth {} reaches the punch radius {}: no circular contact possible",
+                                  lc.max_depth(), lc.punch.radius));
+  if (lc.max_depth() >= lc.geometry.ly)
+    fail("load.path", fmt::format("depth {} is not small against the block depth {}", lc.max_depth(),
+                                  lc.geometry.ly));
+  if (!lc.load.segment_increments.empty() && lc.load.segment_increments.size() + 1 != path.size())
+    fail("load.increments", fmt::format("has {} per-segment counts for a path of {} segments",
+                                        lc.load.segment_increments.size(), path.size() - 1));
+  if (lc.load.increments < 1) fail("load.increments", fmt::format("must be >= 1 (got {})", lc.load.increments));
+  if (lc.load.increments > 10'000'000)
+    fail("load.increments", fmt::format("{} is more than 1e7 increments", lc.load.increments));
+
+  if (lc.mesh.contact_nodes < 2) fail("mesh.contact_nodes", fmt::format("must be >= 2 (got {})", lc.mesh.contact_nodes));
+  if (lc.mesh.contact_half_width) positive("mesh.contact_half_width", *lc.mesh.contact_half_width);
+  if (lc.mesh.contact_half_width && punch.shape == PunchShapeKind::flat)
+    fail("mesh.contact_half_width", "a flat punch's contact radius is punch.radius: the mesh is sized from it");
+  if (lc.mesh.fine_width) positive("mesh.fine_width", *lc.mesh.fine_width);
+  if (lc.mesh.fine_depth) positive("mesh.fine_depth", *lc.mesh.fine_depth);
+  if (lc.mesh.growth && !(*lc.mesh.growth >= 1.0 && *lc.mesh.growth <= 2.0))
+    fail("mesh.growth", fmt::format("must lie in [1, 2] (got {})", *lc.mesh.growth));
+  if (lc.mesh.target_error) {
+    if (!(*lc.mesh.target_error >= 1e-5 && *lc.mesh.target_error <= 0.1))
+      fail("mesh.target_error", fmt::format("must lie in [1e-5, 0.1] (got {})", *lc.mesh.target_error));
+    if (lc.mesh.error_estimate == ErrorEstimateChoice::off)
+      fail("mesh.target_error", "needs an error estimate: mesh.error_estimate = \"off\" cannot check a target");
+  }
+
+  validate_analysis(lc);
+  if (lc.output.dir.empty()) fail("output.dir", "must not be empty");
+  if (lc.output.checkpoint_every < 0)
+    fail("output.checkpoint_every", fmt::format("must be >= 0 (got {})", lc.output.checkpoint_every));
+  if (lc.output.fields_every < 0) fail("output.fields_every", fmt::format("must be >= 0 (got {})", lc.output.fields_every));
+  for (std::size_t i = 0; i < lc.output.profile_depths.size(); ++i) {
+    const double d = lc.output.profile_depths[i];
+    if (!(d >= 0.0 && d <= lc.geometry.ly))
+      fail("output.profile_depths", fmt::format("element {} = {} is not a depth within the block [0, {}]", i, d, lc.geometry.ly));
+  }
+
+  // The residual is relative to E* alpha_max; round-off in assembling it is about 1e-16 times the
+  // condition of the stiffness, so a tolerance below 1e-14 cannot be reached, only run into.
+  if (!(lc.solver.tolerance >= 1e-14 && lc.solver.tolerance < 1e-2))
+    fail("solver.tolerance", fmt::format("must lie in [1e-14, 1e-2) (got {}): below 1e-14 round-off dominates the "
+                                         "residual",
+                                         lc.solver.tolerance));
+  if (lc.solver.max_newton < 1 || lc.solver.max_newton > 1000)
+    fail("solver.max_newton", fmt::format("must lie in [1, 1000] (got {})", lc.solver.max_newton));
+  if (lc.solver.max_cutbacks < 0 || lc.solver.max_cutbacks > 60)
+    fail("solver.max_cutbacks", fmt::format("must lie in [0, 60] (got {})", lc.solver.max_cutbacks));
+}
+
+}  // namespace indentsim
