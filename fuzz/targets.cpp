@@ -3,6 +3,7 @@
 #include <string>
 
 #include "indentsim/output/checkpoint.hpp"
+#include "indentsim/driver/resume.hpp"
 #include "indentsim/base/error.hpp"
 #include "indentsim/input/load_case.hpp"
 #include "indentsim/geometry/mesh.hpp"

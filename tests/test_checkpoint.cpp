@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "indentsim/output/checkpoint.hpp"
+#include "indentsim/driver/resume.hpp"
 #include "indentsim/base/error.hpp"
 #include "indentsim/output/run_output.hpp"
 #include "test_support.hpp"

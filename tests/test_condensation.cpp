@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include "indentsim/driver/resume.hpp"
 #include "indentsim/solvers/condensation.hpp"
 #include "indentsim/simulation/simulation.hpp"
 #include "indentsim/solvers/solver.hpp"

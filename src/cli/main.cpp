@@ -22,6 +22,7 @@
 #include <nlohmann/json.hpp>
 
 #include "indentsim/output/checkpoint.hpp"
+#include "indentsim/output/checkpoint_folder.hpp"
 #include "indentsim/analysis/curve_analysis.hpp"
 #include "indentsim/base/error.hpp"
 #include "indentsim/simulation/error_estimate.hpp"

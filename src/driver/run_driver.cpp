@@ -10,6 +10,8 @@
 #include <fmt/format.h>
 
 #include "indentsim/output/checkpoint.hpp"
+#include "indentsim/driver/resume.hpp"
+#include "indentsim/output/checkpoint_folder.hpp"
 #include "indentsim/base/error.hpp"
 #include "indentsim/simulation/error_estimate.hpp"
 #include "indentsim/base/file_system.hpp"
