@@ -137,3 +137,40 @@ TEST(LoadHistory, J2AndIlyushinAgreeBeforeTheyDiverge) {
   EXPECT_LT(last, 0.08);
   EXPECT_GT(j2.curve.back().force, ilyushin.curve.back().force);  // flow theory is stiffer
 }
+
+// The one reversal detector on paths with holds (equal consecutive depths): a hold at a peak
+// belongs to the loading, the branch runs down through holds to its valley, and the summary finds
+// a separation that comes after a hold on the way down.
+TEST(LoadPath, BranchesRunThroughHoldsToTheirValleys) {
+  const std::vector<double> path{0.0, 2.0, 4.0, 4.0, 2.0, 0.0, 0.0, 2.0, 4.0, 3.0};
+  const std::vector<CurveBranch> branches = unloading_branches(path);
+  ASSERT_EQ(branches.size(), 2u);
+  EXPECT_EQ(branches[0].loading_start, 0u);
+  EXPECT_EQ(branches[0].peak, 3u);  // the hold's last point
+  EXPECT_EQ(branches[0].end, 6u);   // through the hold at the valley
+  EXPECT_EQ(branches[1].loading_start, 6u);
+  EXPECT_EQ(branches[1].peak, 8u);
+  EXPECT_EQ(branches[1].end, 9u);
+  // Every peak and every valley strictly inside the path, holds included.
+  EXPECT_EQ(reversal_steps(path), (std::vector<int>{3, 6, 8}));
+  // A hold part-way down is no valley.
+  EXPECT_EQ(reversal_steps({0.0, 5.0, 3.0, 3.0, 0.0, 1.0}), (std::vector<int>{1, 4}));
+
+  LoadHistorySummary summary;
+  const std::vector<double> depth{0.0, 5e-5, 3e-5, 3e-5, 0.0}, force{0.0, 10.0, 4.0, 4.0, 0.0};
+  const std::vector<int> nodes{1, 5, 3, 3, 0};
+  for (int k = 0; k < 5; ++k) {
+    IncrementRecord r;
+    r.step = k;
+    r.alpha = depth[static_cast<std::size_t>(k)];
+    r.force = force[static_cast<std::size_t>(k)];
+    r.contact_nodes = nodes[static_cast<std::size_t>(k)];
+    summary.add(r, k == 4 ? 2e-5 : 0.0);
+  }
+  const auto unloadings = summary.unloadings();
+  ASSERT_EQ(unloadings.size(), 1u);
+  EXPECT_EQ(unloadings[0].step, 1);
+  EXPECT_TRUE(unloadings[0].separated);
+  EXPECT_EQ(unloadings[0].separation_step, 4);
+  EXPECT_EQ(unloadings[0].residual_depth, 2e-5);
+}

@@ -8,6 +8,7 @@
 #include <thread>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "indentsim/output/checkpoint.hpp"
 #include "indentsim/driver/resume.hpp"
@@ -56,10 +57,9 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 }
 
 std::string companions_note(const LoadCase& lc) {
-  const bool observed = lc.mesh.error_estimate == ErrorEstimateChoice::observed;
-  return fmt::format("error estimate: companion run{} at contact_nodes = {}", observed ? "s" : "",
-                     observed ? fmt::format("{} and {}", lc.mesh.contact_nodes / 2, lc.mesh.contact_nodes / 4)
-                              : std::to_string(lc.mesh.contact_nodes / 2));
+  const std::vector<int> levels = companion_contact_nodes(lc);
+  return fmt::format("error estimate: companion run{} at contact_nodes = {}", levels.size() > 1 ? "s" : "",
+                     fmt::join(levels, " and "));
 }
 
 /// mesh.error_estimate: the companion runs of `sim` (before anything is written), timed as the

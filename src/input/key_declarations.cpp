@@ -265,8 +265,8 @@ const std::vector<KeyDeclaration>& key_declarations() {
     k.push_back(integer_key({"solver", "max_cutbacks", "integer", "[0, 60]", "", "halvings of one increment before the run stops"},
                             [](auto& c) -> auto& { return c.solver.max_cutbacks; }));
     k.push_back(choice_key({"solver", "linear", "choice", "", "",
-                            "klu (SuiteSparse KLU), cholmod (supernodal Cholesky), auto (CHOLMOD above 1000 unknowns "
-                            "of the Newton system)"},
+                            "klu (SuiteSparse KLU), cholmod (supernodal Cholesky), auto (CHOLMOD from 1000 unknowns "
+                            "of the run's largest Newton system, chosen once per run)"},
                            linear_names, [](auto& c) -> auto& { return c.solver.linear; }));
     k.push_back(choice_key({"solver", "far_field", "choice", "", "",
                             "condense (Newton solves the near field, the elastic far field condensed exactly), full "

@@ -166,10 +166,10 @@ struct StateReader {
   void operator()(const char*, std::uint64_t& i, const char* what) { i = in.get<std::uint64_t>(what); }
   void operator()(const char*, std::vector<double>& v, const char* what) { v = in.get_vector<double>(what); }
   void operator()(const char*, std::vector<char>& v, const char* what) { v = in.get_vector<char>(what); }
-  void operator()(const char*, std::vector<std::string>& v, const char* what) {
+  void operator()(const char*, std::vector<std::string>& v, const char* what) {  // the warnings
     const auto n = in.get<std::uint64_t>(what);
-    if (n > in.left()) in.fail(fmt::format("claims more entries in {} than the file holds", what));
-    for (std::uint64_t k = 0; k < n; ++k) v.push_back(in.get_string(what));
+    if (n > in.left()) in.fail("claims more warnings than the file holds");
+    for (std::uint64_t k = 0; k < n; ++k) v.push_back(in.get_string("a warning"));
   }
   void operator()(const char*, NearField& near, const char* what) {
     near.condensed = in.get<std::uint8_t>(what) != 0;

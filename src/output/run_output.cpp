@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -18,7 +19,7 @@ namespace {
 /// than they are known (the value a reader parses is the rounded one).
 double significant(double x, int digits) {
   if (!std::isfinite(x) || x == 0.0) return x;
-  return std::stod(fmt::format("{:.{}e}", x, digits - 1));
+  return std::strtod(fmt::format("{:.{}e}", x, digits - 1).c_str(), nullptr);  // never throws
 }
 
 /// A measured time in seconds to the microsecond, a ratio of times to 1e-4: what a clock can say.
@@ -172,6 +173,7 @@ std::string LoadHistorySummary::json(const nlohmann::ordered_json& run_fields, R
   j["peak_depth"] = peak_depth_;
   j["peak_force"] = peak_force_;
   nlohmann::ordered_json unloading = nlohmann::ordered_json::array();
+  const std::vector<CurveBranch> branches = unloading_branches(depths_);
   for (const Unloading& u : unloadings()) {
     nlohmann::ordered_json b = {{"step", u.step},
                                 {"depth", u.depth},
@@ -187,7 +189,7 @@ std::string LoadHistorySummary::json(const nlohmann::ordered_json& run_fields, R
       for (const auto& [s, t] : truths_)
         if (s == u.step) truth = t;
       try {
-        for (const CurveBranch& branch : unloading_branches(depths_))
+        for (const CurveBranch& branch : branches)
           if (steps_[branch.peak] == u.step)
             b["analysis"] = branch_json(analyze_branch(depths_, forces_, branch, context_, truth), context_);
       } catch (const AnalysisError& e) {
@@ -215,6 +217,8 @@ void RunOutput::set_configuration(const RunConfiguration& configuration) {
   nlohmann::ordered_json j = nlohmann::ordered_json::object();
   for (const auto& [name, value] : describe(configuration)) j[name] = value;
   run_fields_["configuration"] = std::move(j);
+  // The folder says it from its first write on: a run killed before it finishes keeps it.
+  write_file_atomically(dir_ / "summary.json", summary_.json(run_fields_, RunStatus::running, ""));
 }
 
 void RunOutput::set_error_estimate(const DiscretizationErrorEstimate* error_estimate) {
@@ -235,9 +239,8 @@ RunOutput::RunOutput(const std::filesystem::path& dir, const LoadCase& load_case
       curve_(dir / "curve.csv", error_estimate, error_estimate_pending),
       fields_(dir),
       deepest_depth_(load_case.max_depth()) {
-  const std::vector<double> targets = plan_increments(load_case.load);
-  for (int k : reversal_steps(targets))
-    if (targets[static_cast<std::size_t>(k)] > targets[static_cast<std::size_t>(k) - 1]) peak_steps_.push_back(k);
+  for (const CurveBranch& b : unloading_branches(plan_increments(load_case.load)))
+    peak_steps_.push_back(static_cast<int>(b.peak));
   write_file_atomically(dir_ / "case.toml", to_toml(load_case));
   write_file_atomically(dir_ / "summary.json", summary_.json(run_fields_, RunStatus::running, ""));
   for (std::size_t k = 0; k < replay_curve.size(); ++k) {

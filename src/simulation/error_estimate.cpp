@@ -75,6 +75,14 @@ std::optional<std::string> error_estimate_unavailable(const LoadCase& load_case)
                      mesh.contact_nodes, divisor, 2 * divisor);
 }
 
+std::vector<int> companion_contact_nodes(const LoadCase& load_case) {
+  const MeshInput& mesh = load_case.mesh;
+  if (mesh.error_estimate == ErrorEstimateChoice::off || error_estimate_unavailable(load_case)) return {};
+  std::vector<int> levels{mesh.contact_nodes / 2};
+  if (mesh.error_estimate == ErrorEstimateChoice::observed) levels.push_back(mesh.contact_nodes / 4);
+  return levels;
+}
+
 DiscretizationErrorEstimate::DiscretizationErrorEstimate(const Simulation& main)
     : DiscretizationErrorEstimate(main.load_case(), RunPlan{main.plan(), main.plastic_zone_growth()}) {}
 
@@ -84,9 +92,7 @@ DiscretizationErrorEstimate::DiscretizationErrorEstimate(const LoadCase& main_ca
       contact_nodes_(main_case.mesh.contact_nodes) {
   if (method_ == ErrorEstimateChoice::off) throw std::invalid_argument("error estimate: mesh.error_estimate is off");
   if (const auto why = error_estimate_unavailable(main_case)) throw std::invalid_argument(*why);
-  std::vector<int> levels{contact_nodes_ / 2};
-  if (method_ == ErrorEstimateChoice::observed) levels.push_back(contact_nodes_ / 4);
-  for (int nodes : levels) {
+  for (int nodes : companion_contact_nodes(main_case)) {
     companions_.push_back(run_companion(main_case, main_plan, nodes));
     const CompanionRun& c = companions_.back();
     if (!c.failure.empty())

@@ -61,8 +61,9 @@ std::vector<CurveBranch> unloading_branches(const std::vector<double>& depth) {
   for (std::size_t i = 0; i + 1 < n;) {
     if (depth[i + 1] > depth[i]) risen = true;
     if (depth[i + 1] < depth[i] && risen) {
+      // Down to the valley: through holds, until the depth rises again.
       CurveBranch b{loading_start, i, i};
-      while (b.end + 1 < n && depth[b.end + 1] < depth[b.end]) ++b.end;
+      while (b.end + 1 < n && depth[b.end + 1] <= depth[b.end]) ++b.end;
       branches.push_back(b);
       loading_start = b.end;
       risen = false;

@@ -209,20 +209,29 @@ RunConfiguration resolve_choices(const LoadCase& lc, const RunPlan& plan, const 
     }
   }
   c.unknowns = mesh.equations();
-  c.system_unknowns = c.unknowns;
-  if (c.near_field.condensed) {
-    const int candidates = contact_candidate_count(mesh, *make_punch(lc.punch));
-    std::vector<int> candidate_equations;
-    for (int i = 0; i < candidates; ++i)
-      candidate_equations.push_back(mesh.equation(Mesh::dof_v(mesh.node(i, mesh.top_row()))));
-    const std::vector<char> near = near_field_equations(mesh, candidate_equations, c.near_field);
-    c.system_unknowns = std::count(near.begin(), near.end(), char{1});
+  std::vector<int> candidate_equations;
+  const int candidates = contact_candidate_count(mesh, *make_punch(lc.punch));
+  for (int i = 0; i < candidates; ++i)
+    candidate_equations.push_back(mesh.equation(Mesh::dof_v(mesh.node(i, mesh.top_row()))));
+  const auto unknowns_of = [&](const NearField& near) -> std::int64_t {
+    if (!near.condensed) return c.unknowns;
+    const std::vector<char> is_near = near_field_equations(mesh, candidate_equations, near);
+    return std::count(is_near.begin(), is_near.end(), char{1});
+  };
+  c.system_unknowns = unknowns_of(c.near_field);
+  // The linear solver serves every Newton system of the run: it is chosen on the largest, the
+  // near field the run grows to at its deepest point (Simulation::anticipate_plastic_zone).
+  std::int64_t largest = c.system_unknowns;
+  if (c.near_field.condensed && !c.plan.plastic_zone.empty()) {
+    NearField deepest = near_field_needed(lc, mesh, plan.mesh, c.plan.plastic_zone, lc.max_depth());
+    deepest.condensed = true;
+    deepest.elements_x = std::max(deepest.elements_x, c.near_field.elements_x);
+    deepest.elements_y = std::max(deepest.elements_y, c.near_field.elements_y);
+    deepest.contact_nodes = std::max(deepest.contact_nodes, c.near_field.contact_nodes);
+    largest = unknowns_of(deepest);
   }
-  c.linear_solver = choose_linear_solver(lc.solver.linear, static_cast<int>(c.system_unknowns));
-  if (lc.mesh.error_estimate != ErrorEstimateChoice::off && !error_estimate_unavailable(lc)) {
-    c.companion_contact_nodes.push_back(lc.mesh.contact_nodes / 2);
-    if (lc.mesh.error_estimate == ErrorEstimateChoice::observed) c.companion_contact_nodes.push_back(lc.mesh.contact_nodes / 4);
-  }
+  c.linear_solver = choose_linear_solver(lc.solver.linear, static_cast<int>(largest));
+  c.companion_contact_nodes = companion_contact_nodes(lc);
   return c;
 }
 

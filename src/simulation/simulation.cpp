@@ -384,10 +384,12 @@ void Simulation::restore(const SimulationState& s) {
       }))
     throw std::invalid_argument("the saved plastic zone growth is not a list of depths and extents");
   const bool rebuild = !(near == state_.near_field);
+  // The bulk model checks the history against its laws; should it refuse, nothing else changed
+  // (a half-restored bulk model is not stepped: resume_from discards the simulation).
+  bulk_->restore(s.history, s.u.data());
   state_ = s;
-  state_.history.clear();     // the bulk model holds the live history
-  state_.in_contact.clear();  // implied by u
-  bulk_->restore(s.history, state_.u.data());
+  state_.history = {};     // the bulk model holds the live history
+  state_.in_contact = {};  // implied by u
   if (rebuild) build_system();
   if (contact().in_contact != s.in_contact)
     throw std::invalid_argument("the saved contact set does not follow from the saved displacement");

@@ -158,7 +158,7 @@ private:
   /// The layer view of a state: {layers.csv rows, profiles.csv rows}.
   std::pair<std::string, std::string> layer_tables(const IncrementSnapshot& state, int step, bool header) const;
 
-  /// summary.json's "error_estimate" and "target_error" members (each line ending with a comma).
+  /// summary.json's "error_estimate" and "target_error" members.
   nlohmann::ordered_json error_fields(const PhaseTimes& times) const;
 
   std::filesystem::path dir_;
@@ -175,7 +175,7 @@ private:
   int last_step_ = -1, last_fields_step_ = -1;
   double deepest_depth_ = 0.0;  ///< the load path's deepest waypoint
   int peak_step_ = -1;          ///< the increment that reached it (its fields and tables are kept)
-  std::vector<int> peak_steps_;  ///< the planned increments where the path turns from loading to unloading
+  std::vector<int> peak_steps_;  ///< the planned increments where an unloading branch starts
   std::pair<std::string, std::string> peak_tables_;
 };
 

@@ -49,6 +49,9 @@ struct CompanionRun {
 /// Why `load_case` cannot have the error estimate it asks for (its companions would have fewer
 /// than 2 contact nodes), or nullopt.  Such a run goes without one, with this as a warning.
 std::optional<std::string> error_estimate_unavailable(const LoadCase& load_case);
+/// The contact_nodes of the companion runs (half the run's; for "observed" also a quarter), or
+/// none when the estimate is off or unavailable.
+std::vector<int> companion_contact_nodes(const LoadCase& load_case);
 
 /// The order p of P - P_exact ~ h^p that the estimate assumes for a load case: the punch shape's
 /// (PunchShape::force_convergence_order: 2, or 1 under a flat punch's singular rim), lowered to 1.5

@@ -21,11 +21,12 @@ struct CurveBranch {
   std::size_t loading_start = 0, peak = 0, end = 0;
 };
 /// Every unloading branch: where the depth falls after having risen (a hold at the peak belongs to
-/// the loading: the branch starts at the hold's last point), to where it stops falling.  The one
-/// reversal detector: the summary, the analysis and the checkpoint schedule all use it.
+/// the loading: the branch starts at the hold's last point), down to the valley, through any
+/// holds, until the depth rises again (or the curve ends).  The one reversal detector: the
+/// summary, the analysis and the checkpoint schedule all use it.
 std::vector<CurveBranch> unloading_branches(const std::vector<double>& depth);
 /// The planned increments (indices into `targets`) where the load path reverses: every branch's
-/// peak, and its end where the path goes on (the valleys).
+/// peak, and its end where the path rises again (the valleys).
 std::vector<int> reversal_steps(const std::vector<double>& targets);
 /// The planned increments after which the depth falls (holds and equal depths included: the
 /// last increment before each descent).  Where the path is at its deepest so far, that state is

@@ -151,14 +151,14 @@ private:
   /// Every surface node of the committed state strictly below the punch (no contact, no load).
   bool clear_of_punch() const;
   void check_fine_zone(double half_width);
-  /// (Re)builds the Newton system for near_: condensation, operators, contact, KINSOL.
+  /// (Re)builds the Newton system for the state's near field: condensation, operators, contact, KINSOL.
   void build_system();
   /// The bulk operators the Newton system uses (plastic, and linear elastic for the predictor).
   BulkOperator& system_bulk();
   BulkOperator& system_elastic_bulk();
   void to_system(const std::vector<double>& u, std::vector<double>& u_system) const;
   void from_system(const std::vector<double>& u_system, std::vector<double>& u) const;
-  /// In a condensed run: grows near_ if the converged full solution `u` at depth `alpha` breaks the
+  /// In a condensed run: grows the near field if the converged full solution `u` at depth `alpha` breaks the
   /// condensation's assumption; true if it grew (the increment must be repeated).
   bool grow_near_field(const std::vector<double>& u, double alpha);
   /// Grows the near field ahead of the pilot's plastic zone before an increment to `target`.
