@@ -1,6 +1,9 @@
 // Reading load cases: the fixed keys, overrides, and every kind of bad input named precisely.
+#include <cmath>
 #include <filesystem>
+#include <regex>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include "indentsim/base/error.hpp"
@@ -134,4 +137,35 @@ TEST(LoadCase, MeshTooLargeForMemoryIsRejectedBeforeAllocation) {
     EXPECT_EQ(e.key(), "mesh.contact_nodes");
     EXPECT_NE(e.problem().find("GiB"), std::string::npos) << e.problem();
   }
+}
+
+// A number key's accepted interval is stated once, in its declaration, and those very words are
+// enforced: a value just outside the interval `indentsim keys` shows is refused, naming the key.
+TEST(LoadCase, EveryDeclaredIntervalIsEnforcedAsWritten) {
+  const std::regex one_sided(R"(^(>=?) ([-+0-9.e]+)(,.*)?$)"), two_sided(R"(^([\(\[])([-+0-9.e]+), ([-+0-9.e]+)([\)\]]).*$)");
+  int checked = 0;
+  for (const KeyDescription& k : describe_keys()) {
+    if ((k.type != "number" && k.type != "integer") || k.key.rfind("punch.", 0) == 0) continue;  // punch: per shape
+    std::smatch m;
+    double outside = 0.0;
+    if (std::regex_match(k.range, m, one_sided)) {
+      const double lower = std::stod(m.str(2));
+      outside = m.str(1) == ">" ? lower : lower - 1.0;
+    } else if (std::regex_match(k.range, m, two_sided)) {
+      const double upper = std::stod(m.str(3));
+      outside = m.str(4) == ")" ? upper : upper + std::max(1.0, std::abs(upper));
+    } else {
+      continue;
+    }
+    SCOPED_TRACE(k.key + " " + k.range);
+    const std::string value = k.type == "integer" ? std::to_string(static_cast<long>(outside)) : fmt::format("{:.17g}", outside);
+    try {
+      (void)indentsim::testing::shipped_case("deep_plastic.toml", {k.key + "=" + value});
+      ADD_FAILURE() << k.key << " = " << value << " was accepted";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.key(), k.key) << e.what();
+    }
+    ++checked;
+  }
+  EXPECT_GE(checked, 20);  // every bounded number key of the table (geometry, material, mesh, output, solver, analysis)
 }

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <type_traits>
 
 #include "indentsim/base/version.hpp"
 
@@ -10,12 +11,83 @@ namespace indentsim {
 
 namespace input_detail {
 
+std::optional<Bounds> bounds_of(const std::string& range) {
+  const auto number = [](const std::string& text) -> std::optional<double> {
+    std::size_t used = 0;
+    try {
+      const double x = std::stod(text, &used);
+      if (text.find_first_not_of(' ', used) == std::string::npos) return x;
+    } catch (const std::exception&) {
+    }
+    return std::nullopt;
+  };
+  const std::string head = range.substr(0, range.find(range.front() == '(' || range.front() == '[' ? ')' : ','));
+  Bounds b;
+  if (range.rfind(">=", 0) == 0 || range.rfind("> ", 0) == 0) {
+    const bool closed = range[1] == '=';
+    const auto lower = number(head.substr(closed ? 2 : 1));
+    if (!lower) return std::nullopt;
+    b.lower = *lower;
+    b.lower_closed = closed;
+    b.words = head;
+    return b;
+  }
+  if (range.front() != '(' && range.front() != '[') return std::nullopt;
+  const std::size_t close = range.find_first_of(")]");
+  const std::size_t comma = range.find(',');
+  if (close == std::string::npos || comma == std::string::npos || comma > close) return std::nullopt;
+  const auto lower = number(range.substr(1, comma - 1)), upper = number(range.substr(comma + 1, close - comma - 1));
+  if (!lower || !upper) return std::nullopt;
+  b.lower = *lower;
+  b.upper = *upper;
+  b.lower_closed = range.front() == '[';
+  b.upper_closed = range[close] == ']';
+  b.two_sided = true;
+  b.words = range.substr(0, close + 1);
+  return b;
+}
+
+std::optional<std::string> Bounds::problem(double value) const {
+  const bool above = lower_closed ? value >= lower : value > lower;
+  const bool below = upper_closed ? value <= upper : value < upper;
+  if (above && below) return std::nullopt;  // NaN is neither
+  return two_sided ? fmt::format("must lie in {} (got {})", words, value) : fmt::format("must be {} (got {})", words, value);
+}
+
+void check_declared_ranges(const LoadCase& lc, const std::string& section) {
+  for (const KeyDeclaration& k : key_declarations())
+    if (k.check && section == k.section) k.check(lc);
+}
+
+namespace {
+
+/// The check of a number key's declared interval, with `why` after the message (a reason the
+/// bound is where it is); for an optional key only when it is given.
+template <class Access>
+void attach_bounds(KeyDeclaration& k, Access access, const char* why = "") {
+  const auto bounds = bounds_of(k.range);
+  if (!bounds) return;
+  const std::string key = std::string(k.section) + "." + k.name;
+  k.check = [=, b = *bounds](const LoadCase& lc) {
+    const auto& value = access(lc);
+    if constexpr (std::is_same_v<std::decay_t<decltype(value)>, std::optional<double>>) {
+      if (!value) return;
+      if (auto problem = b.problem(*value)) throw InputError(lc.source, key, *problem + why);
+    } else {
+      if (auto problem = b.problem(static_cast<double>(value))) throw InputError(lc.source, key, *problem + why);
+    }
+  };
+}
+
+}  // namespace
+
 // The declarations, section by section in the order case.toml shows them.
 template <class Access>
-KeyDeclaration number_key(KeyDeclaration k, Access access) {
+KeyDeclaration number_key(KeyDeclaration k, Access access, const char* why = "") {
   const std::string section = k.section, name = k.name;
   k.read = [=](const Reader& r, LoadCase& lc) { r.read_number(section, name, access(lc)); };
   k.write = [=](const LoadCase& lc) -> std::optional<std::string> { return toml_number(access(lc)); };
+  attach_bounds(k, access, why);
   return k;
 }
 template <class Access>
@@ -27,6 +99,7 @@ KeyDeclaration optional_number_key(KeyDeclaration k, Access access) {
     if (!value) return std::nullopt;
     return toml_number(*value);
   };
+  attach_bounds(k, access);
   return k;
 }
 template <class Access>
@@ -34,6 +107,7 @@ KeyDeclaration integer_key(KeyDeclaration k, Access access) {
   const std::string section = k.section, name = k.name;
   k.read = [=](const Reader& r, LoadCase& lc) { r.read_integer(section, name, access(lc)); };
   k.write = [=](const LoadCase& lc) -> std::optional<std::string> { return std::to_string(access(lc)); };
+  attach_bounds(k, access);
   return k;
 }
 template <class Access>
@@ -142,13 +216,17 @@ const std::vector<KeyDeclaration>& key_declarations() {
                             "elastic; ilyushin (deformation theory, the paper's); j2 (flow theory)", true},
                            model_names, [](auto& c) -> auto& { return c.material.model; }));
     k.push_back(number_key({"material", "E", "number", "[1e-100, 1e100]", "Pa", "Young's modulus", true},
-                           [](auto& c) -> auto& { return c.material.E; }));
+                           [](auto& c) -> auto& { return c.material.E; },
+                           // Stresses and forces are E times O(1) numbers and their squares are formed
+                           // (norms, J2): beyond these bounds double precision cannot hold them.
+                           ": beyond what double precision can solve (the results scale with E: use SI units, "
+                           "pascals)"));
     k.push_back(number_key({"material", "nu", "number", "(-1, 0.5)", "", "Poisson's ratio", true},
                            [](auto& c) -> auto& { return c.material.nu; }));
     k.push_back(number_key({"material", "e0", "number", "(0, 1)", "",
                             "elastic limit of the strain intensity e_u; the uniaxial yield stress is sigma_y = 3 mu e0 "
                             "= E e0 3 / (2 (1 + nu)) (give e0 or yield_stress, not both)"},
-                           [](auto& c) -> auto& { return c.material.e0; }));
+                           [](auto& c) -> auto& { return c.material.e0; }, ": a strain"));
     {
       KeyDeclaration ys{"material", "yield_stress", "number", "> 0", "Pa",
                         "uniaxial yield stress sigma_y, instead of e0 (e0 = sigma_y / (3 mu))"};
@@ -259,7 +337,10 @@ const std::vector<KeyDeclaration>& key_declarations() {
                            [](auto& c) -> auto& { return c.analysis.indenter_nu; }));
     k.push_back(number_key({"solver", "tolerance", "number", "[1e-14, 1e-2)", "",
                             "residual max-norm relative to E* times the deepest depth (times 2 pi a* in axisymmetry: ring forces)"},
-                           [](auto& c) -> auto& { return c.solver.tolerance; }));
+                           [](auto& c) -> auto& { return c.solver.tolerance; },
+                           // The residual is relative to E* alpha_max; round-off in assembling it is about
+                           // 1e-16 times the condition of the stiffness: below 1e-14 it is only run into.
+                           ": below 1e-14 round-off dominates the residual"));
     k.push_back(integer_key({"solver", "max_newton", "integer", "[1, 1000]", "", "Newton iterations per attempt"},
                             [](auto& c) -> auto& { return c.solver.max_newton; }));
     k.push_back(integer_key({"solver", "max_cutbacks", "integer", "[0, 60]", "", "halvings of one increment before the run stops"},

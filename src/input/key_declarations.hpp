@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -66,7 +67,10 @@ struct KeyDeclaration {
   const char* section;
   const char* name;
   const char* type;   ///< as `indentsim keys` shows it
-  std::string range;  ///< the values accepted, in words (validate() enforces them)
+  /// The values accepted, in words.  For a number or integer key its leading interval ("> 0",
+  /// ">= 2", "(-1, 0.5)", "[1, 2]", ...) is enforced from these very words (check); what follows
+  /// a comma ("> the deepest depth") involves other keys and is validate()'s.
+  std::string range;
   const char* unit;   ///< SI unit, or "" for a pure number, a word or a path
   const char* help;
   bool required = false;
@@ -76,7 +80,19 @@ struct KeyDeclaration {
   std::function<std::optional<std::string>(const LoadCase&)> write;
   /// Shown as a comment in case.toml, not as a key (a value derived from another key).
   bool derived = false;
+  /// Throws InputError naming the key when its value lies outside the declared interval.
+  std::function<void(const LoadCase&)> check;
 };
+
+/// The accepted interval at the head of a key's range words (nullopt: none there).
+struct Bounds {
+  double lower = -std::numeric_limits<double>::infinity(), upper = std::numeric_limits<double>::infinity();
+  bool lower_closed = false, upper_closed = false, two_sided = false;
+  std::string words;  ///< as declared: "> 0", "[1, 2]"
+  /// "must be > 0 (got x)" / "must lie in [1, 2] (got x)" when `value` is outside; nullopt inside.
+  std::optional<std::string> problem(double value) const;
+};
+std::optional<Bounds> bounds_of(const std::string& range);
 
 inline std::vector<std::string> section_names(const std::vector<KeyDeclaration>& keys) {
   std::vector<std::string> names;
@@ -298,6 +314,8 @@ void apply_override(toml::table& root, const std::string& text, const std::strin
 /// The TOML text with the --set overrides applied; a syntax error names its line and column.
 toml::table parse_with_overrides(const std::string& text, const std::string& source,
                                  const std::vector<std::string>& overrides);
+/// Every declared interval of `section`'s keys (KeyDeclaration::check), in declaration order.
+void check_declared_ranges(const LoadCase& lc, const std::string& section);
 /// The punch keys that apply to the case's shape; any other punch key given is a mistake.  Reads
 /// a profile file.
 void check_punch_keys(const Reader& r, LoadCase& lc);

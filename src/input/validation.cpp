@@ -10,12 +10,6 @@
 
 namespace indentsim {
 
-namespace {
-
-constexpr double min_modulus = 1e-100, max_modulus = 1e100;  // material.E [Pa]
-
-}  // namespace
-
 using namespace input_detail;
 
 /// A tip profile: r from 0 strictly increasing, g from 0 not decreasing, all finite; with a load
@@ -74,17 +68,10 @@ void validate_analysis(const LoadCase& lc) {
   const auto fail = [&](const std::string& key, const std::string& problem) {
     throw InputError(lc.source, key, problem);
   };
+  check_declared_ranges(lc, "analysis");
   const auto& fit = lc.analysis.fit_range;
   if (fit.size() != 2 || !(fit[0] >= 0.0 && fit[0] < fit[1] && fit[1] <= 1.0))
     fail("analysis.fit_range", "must be two fractions of P_max, 0 <= lower < upper <= 1 (for example [0.2, 0.98])");
-  if (lc.analysis.epsilon && !(*lc.analysis.epsilon > 0.0 && *lc.analysis.epsilon <= 1.0))
-    fail("analysis.epsilon", fmt::format("must lie in (0, 1] (got {})", *lc.analysis.epsilon));
-  if (!(lc.analysis.beta >= 1.0 && lc.analysis.beta <= 1.2))
-    fail("analysis.beta", fmt::format("must lie in [1, 1.2] (got {})", lc.analysis.beta));
-  if (lc.analysis.indenter_E && !(*lc.analysis.indenter_E > 0.0))
-    fail("analysis.indenter_E", fmt::format("must be > 0 (got {})", *lc.analysis.indenter_E));
-  if (!(lc.analysis.indenter_nu > -1.0 && lc.analysis.indenter_nu < 0.5))
-    fail("analysis.indenter_nu", fmt::format("must lie in (-1, 0.5) (got {})", lc.analysis.indenter_nu));
 }
 
 }  // namespace input_detail
@@ -93,11 +80,12 @@ void validate(const LoadCase& lc) {
   const auto fail = [&](const std::string& key, const std::string& problem) {
     throw InputError(lc.source, key, problem);
   };
-  const auto positive = [&](const std::string& key, double value) {
-    if (!(value > 0.0)) fail(key, fmt::format("must be > 0 (got {})", value));
-  };
-  positive("geometry.lx", lc.geometry.lx);
-  positive("geometry.ly", lc.geometry.ly);
+  // Each key's own interval, where it is declared (key_declarations.cpp); here what involves
+  // several keys.  The [analysis] keys are validate_analysis'.  Every key given is checked,
+  // whatever the model uses: a case switched to another model later must not carry a value that
+  // was never valid.
+  for (const std::string& section : section_names(key_declarations()))
+    if (section != "analysis") check_declared_ranges(lc, section);
   const auto& punch = lc.punch;
   const bool has_radius = punch.shape == PunchShapeKind::sphere || punch.shape == PunchShapeKind::flat;
   validate_punch_shape(lc);
@@ -112,23 +100,6 @@ void validate(const LoadCase& lc) {
                                            punch.tip_radius, cap, lc.geometry.lx));
   }
   if (punch.shape == PunchShapeKind::profile && !lc.load.path.empty()) validate_profile(lc, true);
-  positive("material.E", lc.material.E);
-  // Stresses and forces are E times O(1) numbers and their squares are formed (norms, J2); beyond
-  // these bounds double precision cannot hold them.  Plausible moduli are warned about, not here.
-  if (!(lc.material.E >= min_modulus && lc.material.E <= max_modulus))
-    fail("material.E", fmt::format("{} Pa is outside [{:g}, {:g}] Pa, beyond what double precision can solve "
-                                   "(the results scale with E: use SI units, pascals)",
-                                   lc.material.E, min_modulus, max_modulus));
-  if (!(lc.material.nu > -1.0 && lc.material.nu < 0.5))
-    fail("material.nu", fmt::format("must lie in (-1, 0.5) (got {})", lc.material.nu));
-  // Every key given is checked, whatever the model uses: a case that is switched to another model
-  // later must not carry a value that was never valid.
-  positive("material.e0", lc.material.e0);
-  if (!(lc.material.e0 < 1.0)) fail("material.e0", fmt::format("must lie in (0, 1): a strain (got {})", lc.material.e0));
-  if (!(lc.material.kappa >= 0.0 && lc.material.kappa < 1.0))
-    fail("material.kappa", fmt::format("must lie in [0, 1) (got {})", lc.material.kappa));
-  if (!(lc.material.n > 0.0 && lc.material.n < 1.0))
-    fail("material.n", fmt::format("must lie in (0, 1) (got {})", lc.material.n));
 
   const auto& path = lc.load.path;
   if (path.size() < 2) fail("load.path", "needs at least two waypoints, starting at 0");
@@ -156,42 +127,18 @@ void validate(const LoadCase& lc) {
   if (lc.load.increments > 10'000'000)
     fail("load.increments", fmt::format("{} is more than 1e7 increments", lc.load.increments));
 
-  if (lc.mesh.contact_nodes < 2) fail("mesh.contact_nodes", fmt::format("must be >= 2 (got {})", lc.mesh.contact_nodes));
-  if (lc.mesh.contact_half_width) positive("mesh.contact_half_width", *lc.mesh.contact_half_width);
   if (lc.mesh.contact_half_width && punch.shape == PunchShapeKind::flat)
     fail("mesh.contact_half_width", "a flat punch's contact radius is punch.radius: the mesh is sized from it");
-  if (lc.mesh.fine_width) positive("mesh.fine_width", *lc.mesh.fine_width);
-  if (lc.mesh.fine_depth) positive("mesh.fine_depth", *lc.mesh.fine_depth);
-  if (lc.mesh.growth && !(*lc.mesh.growth >= 1.0 && *lc.mesh.growth <= 2.0))
-    fail("mesh.growth", fmt::format("must lie in [1, 2] (got {})", *lc.mesh.growth));
-  if (lc.mesh.target_error) {
-    if (!(*lc.mesh.target_error >= 1e-5 && *lc.mesh.target_error <= 0.1))
-      fail("mesh.target_error", fmt::format("must lie in [1e-5, 0.1] (got {})", *lc.mesh.target_error));
-    if (lc.mesh.error_estimate == ErrorEstimateChoice::off)
-      fail("mesh.target_error", "needs an error estimate: mesh.error_estimate = \"off\" cannot check a target");
-  }
+  if (lc.mesh.target_error && lc.mesh.error_estimate == ErrorEstimateChoice::off)
+    fail("mesh.target_error", "needs an error estimate: mesh.error_estimate = \"off\" cannot check a target");
 
   validate_analysis(lc);
   if (lc.output.dir.empty()) fail("output.dir", "must not be empty");
-  if (lc.output.checkpoint_every < 0)
-    fail("output.checkpoint_every", fmt::format("must be >= 0 (got {})", lc.output.checkpoint_every));
-  if (lc.output.fields_every < 0) fail("output.fields_every", fmt::format("must be >= 0 (got {})", lc.output.fields_every));
   for (std::size_t i = 0; i < lc.output.profile_depths.size(); ++i) {
     const double d = lc.output.profile_depths[i];
     if (!(d >= 0.0 && d <= lc.geometry.ly))
       fail("output.profile_depths", fmt::format("element {} = {} is not a depth within the block [0, {}]", i, d, lc.geometry.ly));
   }
-
-  // The residual is relative to E* alpha_max; round-off in assembling it is about 1e-16 times the
-  // condition of the stiffness, so a tolerance below 1e-14 cannot be reached, only run into.
-  if (!(lc.solver.tolerance >= 1e-14 && lc.solver.tolerance < 1e-2))
-    fail("solver.tolerance", fmt::format("must lie in [1e-14, 1e-2) (got {}): below 1e-14 round-off dominates the "
-                                         "residual",
-                                         lc.solver.tolerance));
-  if (lc.solver.max_newton < 1 || lc.solver.max_newton > 1000)
-    fail("solver.max_newton", fmt::format("must lie in [1, 1000] (got {})", lc.solver.max_newton));
-  if (lc.solver.max_cutbacks < 0 || lc.solver.max_cutbacks > 60)
-    fail("solver.max_cutbacks", fmt::format("must lie in [0, 60] (got {})", lc.solver.max_cutbacks));
 }
 
 }  // namespace indentsim
