@@ -4,9 +4,9 @@
     python3 -m indentsim.sweep SWEEP.toml --scheduler tcp://head:8786
     indentsim sweep SWEEP.toml --dask [--scheduler ...]         # the same, from the CLI
 
-    from indentsim.sweep import sweep
+    from indentsim.sweep import sweep, read_table
     outcome = sweep("study.toml", workers=2)                   # from a notebook or a script
-    outcome.table                                              # OUT/results.csv
+    table = read_table(outcome.table)                          # OUT/results.csv as NumPy columns
 
 The library expands the sweep file into its manifest (every run a complete load case keyed by
 its hash; bad input raises InputError before anything starts).  The runs without a result are
@@ -27,6 +27,7 @@ Workers on other machines need the same indentsim, Python and Dask versions as t
 indentsim package on their PYTHONPATH, and OUT on a shared file system.
 """
 import argparse
+import csv
 import json
 import logging
 import math
@@ -37,7 +38,7 @@ from dataclasses import dataclass
 
 from . import _indentsim
 
-__all__ = ["sweep", "SweepOutcome", "run_batch"]
+__all__ = ["sweep", "SweepOutcome", "SchedulerError", "run_batch", "read_table"]
 
 
 @dataclass
@@ -60,6 +61,48 @@ def run_batch(out, keep, runs):
     return _indentsim.run_sweep_batch(out, keep, runs)
 
 
+def read_table(table):
+    """A sweep's table (OUT/results.csv, or any CSV with a header) as {column: NumPy array}, in
+    the table's order.  A column whose cells are all numbers or empty is an array of floats, an
+    empty cell NaN: a run with no value there (no unloading branch, a branch that could not be
+    analysed, a run that failed or is pending: see its `status` and `message`).  `index` is an
+    array of integers; hash, status, force_unit, message and a varied key of strings are arrays
+    of strings."""
+    import numpy as np
+    with open(os.fspath(table), newline="") as f:
+        rows = list(csv.reader(f))
+    if not rows:
+        raise _indentsim.InputError(f"{os.fspath(table)}: table: is empty (no header)")
+    header, body = rows[0], rows[1:]
+    columns = {}
+    for k, name in enumerate(header):
+        cells = [r[k] if k < len(r) else "" for r in body]
+        if name in _TEXT_COLUMNS:
+            columns[name] = np.array(cells, dtype=str)
+            continue
+        try:
+            numbers = np.array([float(c) if c.strip() else math.nan for c in cells], dtype=float)
+        except ValueError:
+            columns[name] = np.array(cells, dtype=str)
+            continue
+        columns[name] = numbers.astype(int) if name == "index" and np.all(np.isfinite(numbers)) else numbers
+    return columns
+
+
+_TEXT_COLUMNS = {"hash", "status", "force_unit", "message"}  # a hash may be all digits: still text
+
+
+SCHEDULER_TIMEOUT_S = 5  # how long a --scheduler that does not answer is tried
+
+
+class SchedulerError(ValueError):
+    """The scheduler given cannot be used: a malformed address, or none answering there."""
+
+    def __init__(self, scheduler, problem):
+        super().__init__(f"scheduler {scheduler}: {problem}")
+        self.scheduler, self.problem = scheduler, problem
+
+
 def _has_result(out, run):
     return os.path.isfile(os.path.join(out, "runs", run["hash"], "result.json"))
 
@@ -69,7 +112,17 @@ def _client(scheduler, workers):
     worker process per core: a run uses one core)."""
     from dask.distributed import Client, LocalCluster
     if scheduler:
-        return Client(scheduler), None
+        # A malformed address raises ValueError at once; an unreachable one OSError after the
+        # timeout (Dask's default would wait 30 s, then print pages of traceback).
+        try:
+            return Client(scheduler, timeout=SCHEDULER_TIMEOUT_S), None
+        except (OSError, ValueError, TypeError) as e:
+            problem = str(e) or type(e).__name__
+            if isinstance(e, OSError):
+                problem = f"cannot connect ({problem}); is a scheduler running there?"
+            else:
+                problem = f"not a scheduler address such as tcp://head:8786 ({problem})"
+            raise SchedulerError(scheduler, problem) from None
     cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
                            dashboard_address=None, silence_logs=logging.ERROR)
     return Client(cluster), cluster
@@ -127,6 +180,9 @@ def main(argv=None):
         parser.error("--batch must be at least 1")
     try:
         o = sweep(a.sweep, scheduler=a.scheduler, workers=a.workers, batch=a.batch, progress=not a.quiet)
+    except SchedulerError as e:
+        print(f"error: --scheduler {e.scheduler}: {e.problem}", file=sys.stderr)
+        return 2
     except _indentsim.InputError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2

@@ -3,9 +3,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <random>
 #include <set>
+#include <unordered_set>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -13,6 +15,7 @@
 
 #include "indentsim/output/checkpoint.hpp"
 #include "indentsim/base/error.hpp"
+#include "indentsim/base/interruption.hpp"
 #include "indentsim/study/sweep_results.hpp"
 
 namespace fs = std::filesystem;
@@ -143,34 +146,96 @@ std::vector<int> permutation(int n, std::mt19937_64& rng) {
   return p;
 }
 
-/// The varied values of every run, before validation.
-std::vector<std::vector<std::string>> design_points(const SweepDefinition& d) {
-  std::vector<std::vector<std::string>> points;
-  if (d.design == SweepDesign::grid) {
-    points.emplace_back();
-    for (const SweptKey& k : d.vary) {  // the first key varies slowest
-      std::vector<std::vector<std::string>> next;
-      for (const auto& p : points)
-        for (const auto& v : k.values) {
-          next.push_back(p);
-          next.back().push_back(v);
-        }
-      points = std::move(next);
-    }
-    return points;
-  }
-  // Latin hypercube (McKay, Beckman and Conover 1979): each key's range cut into `samples`
-  // strata of equal probability, one point in each, the strata paired at random across keys.
-  std::mt19937_64 rng(d.seed);
-  points.assign(static_cast<std::size_t>(d.samples), {});
-  for (const SweptKey& k : d.vary) {
-    const std::vector<int> strata = permutation(d.samples, rng);
-    for (int i = 0; i < d.samples; ++i) {
-      const double fraction = (strata[static_cast<std::size_t>(i)] + unit_draw(rng)) / d.samples;
-      points[static_cast<std::size_t>(i)].push_back(value_text_of_fraction(k, fraction, true));
+/// The varied values of each combination, made one at a time (a sweep of a million runs never
+/// holds a million rows of text).  A grid's combination p is p written in the mixed radix of the
+/// keys' value counts (the first key slowest); a Latin hypercube's fractions are drawn up front,
+/// in the order the design always drew them (a number per key and sample).
+class DesignPoints {
+public:
+  explicit DesignPoints(const SweepDefinition& d) : d_(d) {
+    if (d.design == SweepDesign::grid) return;
+    // Latin hypercube (McKay, Beckman and Conover 1979): each key's range cut into `samples`
+    // strata of equal probability, one point in each, the strata paired at random across keys.
+    std::mt19937_64 rng(d.seed);
+    fractions_.resize(d.vary.size());
+    for (std::size_t j = 0; j < d.vary.size(); ++j) {
+      const std::vector<int> strata = permutation(d.samples, rng);
+      fractions_[j].resize(static_cast<std::size_t>(d.samples));
+      for (int i = 0; i < d.samples; ++i)
+        fractions_[j][static_cast<std::size_t>(i)] = (strata[static_cast<std::size_t>(i)] + unit_draw(rng)) / d.samples;
     }
   }
-  return points;
+
+  /// The values of combination p (0 <= p < combinations()), one per varied key.
+  std::vector<std::string> values(std::int64_t p) const {
+    std::vector<std::string> v(d_.vary.size());
+    if (d_.design == SweepDesign::grid) {
+      for (std::size_t j = d_.vary.size(); j-- > 0;) {
+        const auto n = static_cast<std::int64_t>(d_.vary[j].values.size());
+        v[j] = d_.vary[j].values[static_cast<std::size_t>(p % n)];
+        p /= n;
+      }
+      return v;
+    }
+    for (std::size_t j = 0; j < d_.vary.size(); ++j)
+      v[j] = value_text_of_fraction(d_.vary[j], fractions_[j][static_cast<std::size_t>(p)], true);
+    return v;
+  }
+
+private:
+  const SweepDefinition& d_;
+  std::vector<std::vector<double>> fractions_;  ///< latin_hypercube: [key][sample]
+};
+
+/// max_runs enforced before anything is expanded: the count, and how to raise the limit.
+void check_run_count(const SweepDefinition& d) {
+  const std::int64_t runs = d.combinations();
+  if (runs <= d.max_runs) return;
+  std::string counts;
+  if (d.design == SweepDesign::grid && d.vary.size() > 1) {
+    for (const SweptKey& k : d.vary) counts += fmt::format("{}{}", counts.empty() ? "" : " x ", k.values.size());
+    counts = " (" + counts + " values)";
+  }
+  if (runs > largest_max_sweep_runs)
+    throw InputError(d.file.string(), "sweep.max_runs",
+                     fmt::format("the sweep has {} runs{}, more than any sweep may have ({}): split it into smaller "
+                                 "sweeps",
+                                 runs == std::numeric_limits<std::int64_t>::max() ? std::string("over 9.2e18")
+                                                                                  : std::to_string(runs),
+                                 counts, largest_max_sweep_runs));
+  throw InputError(d.file.string(), "sweep.max_runs",
+                   fmt::format("the sweep has {} runs{}, more than the {} a sweep may have{}; if that many runs are "
+                               "meant, raise the limit in [sweep]: max_runs = {}",
+                               runs, counts, d.max_runs,
+                               d.max_runs == default_max_sweep_runs ? " by default" : " by its max_runs", runs));
+}
+
+/// A JSON string (nlohmann's escaping; invalid UTF-8 replaced, never thrown on).
+std::string json_text(const nlohmann::ordered_json& j) {
+  return j.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
+}
+
+/// manifest.json's text: the definition's essentials, then a line per run (its case when asked).
+std::string manifest_json(const SweepManifest& m, bool with_cases) {
+  const SweepDefinition& d = m.definition;
+  std::string text = "{\n";
+  text += " \"indentsim_sweep\": 2,\n";
+  text += " \"sweep\": " + json_text(d.file.string()) + ",\n";
+  text += " \"base\": " + json_text(d.base.string()) + ",\n";
+  text += " \"out\": " + json_text(d.out.string()) + ",\n";
+  text += " \"keep\": " + json_text(d.keep) + ",\n";
+  text += " \"set\": " + json_text(d.set) + ",\n";
+  text += " \"keys\": " + json_text(m.keys) + ",\n";
+  text += " \"runs\": [";
+  for (std::size_t k = 0; k < m.runs.size(); ++k) {
+    if (const int signal = interruption_requested()) throw Interrupted(signal);
+    const SweepRun& r = m.runs[k];
+    nlohmann::ordered_json j = {{"index", r.index}, {"hash", r.hash}, {"values", r.values}};
+    if (with_cases) j["case"] = m.run_case(r);
+    text += (k ? ",\n  " : "\n  ") + json_text(j);
+  }
+  text += m.runs.empty() ? "]\n}\n" : "\n ]\n}\n";
+  return text;
 }
 
 std::string hex16(std::uint64_t h) { return fmt::format("{:016x}", h); }
@@ -195,7 +260,7 @@ SweepDefinition read_sweep_definition(const fs::path& file) {
   }
   const toml::table* sweep = root["sweep"].as_table();
   if (!sweep) throw InputError(source, "sweep", "missing section: [sweep] with base = \"the load case\"");
-  static const std::vector<std::string> known{"base", "out", "design", "samples", "seed", "keep"};
+  static const std::vector<std::string> known{"base", "out", "design", "samples", "seed", "keep", "max_runs"};
   for (const auto& [name, node] : *sweep)
     if (std::find(known.begin(), known.end(), std::string(name.str())) == known.end())
       throw InputError(source, "sweep." + std::string(name.str()), "unknown key (known keys of [sweep]: " + join(known) + ")");
@@ -227,6 +292,7 @@ SweepDefinition read_sweep_definition(const fs::path& file) {
   d.design = design == "grid" ? SweepDesign::grid : SweepDesign::latin_hypercube;
   if (const auto samples = integer("samples", 1, 1000000)) d.samples = static_cast<int>(*samples);
   if (const auto seed = integer("seed", 0, std::numeric_limits<int64_t>::max())) d.seed = static_cast<std::uint64_t>(*seed);
+  if (const auto max_runs = integer("max_runs", 1, largest_max_sweep_runs)) d.max_runs = *max_runs;
   if (d.design == SweepDesign::grid && sweep->contains("samples"))
     throw InputError(source, "sweep.samples", "is for design = \"latin_hypercube\" (a grid runs every combination)");
   if (d.design == SweepDesign::latin_hypercube && d.samples == 0)
@@ -244,10 +310,14 @@ SweepDefinition read_sweep_definition(const fs::path& file) {
     }
   }
 
+  std::set<std::string> set_keys;
   if (const toml::table* set = root["set"].as_table()) {
     std::vector<std::pair<std::string, const toml::node*>> entries;
     flatten(*set, "", false, entries);
-    for (const auto& [key, node] : entries) d.set.push_back(key + "=" + value_text(*node, source, "set." + key));
+    for (const auto& [key, node] : entries) {
+      d.set.push_back(key + "=" + value_text(*node, source, "set." + key));
+      set_keys.insert(key);
+    }
   }
   const toml::table* vary = root["vary"].as_table();
   if (!vary || vary->empty()) throw InputError(source, "vary", "missing section: [vary] names the keys to vary");
@@ -255,6 +325,10 @@ SweepDefinition read_sweep_definition(const fs::path& file) {
   flatten(*vary, "", true, entries);
   std::sort(entries.begin(), entries.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   for (const auto& [key, node] : entries) {
+    // A key set in every run and varied: the varied values would silently win over [set].
+    if (set_keys.count(key))
+      throw InputError(source, key, "is both in [set] and in [vary]: give it in one of them (in [vary] its values "
+                                    "would override [set]'s in every run)");
     SweptKey k = read_swept_key(key, *node, source);
     if (d.design == SweepDesign::grid && k.values.empty())
       throw InputError(source, "vary." + key, "a range on a grid needs count (how many values from `from` to `to`)");
@@ -266,7 +340,20 @@ SweepDefinition read_sweep_definition(const fs::path& file) {
     }
     d.vary.push_back(std::move(k));
   }
+  check_run_count(d);
   return d;
+}
+
+std::int64_t SweepDefinition::combinations() const {
+  if (design == SweepDesign::latin_hypercube) return samples;
+  constexpr std::int64_t most = std::numeric_limits<std::int64_t>::max();
+  std::int64_t n = 1;
+  for (const SweptKey& k : vary) {
+    const auto count = static_cast<std::int64_t>(k.values.size());
+    if (count == 0) return 0;
+    n = n > most / count ? most : n * count;
+  }
+  return n;
 }
 
 std::string case_hash(const LoadCase& load_case) {
@@ -289,69 +376,80 @@ std::string case_hash(const LoadCase& load_case) {
 }
 
 SweepManifest expand_sweep(const SweepDefinition& d) {
+  check_run_count(d);
   SweepManifest m;
   m.definition = d;
   for (const SweptKey& k : d.vary) m.keys.push_back(k.key);
-  std::set<std::string> hashes;
   read_load_case(d.base);  // the base case's own problems name the base case
-  const auto points = design_points(d);
-  for (std::size_t p = 0; p < points.size(); ++p) {
-    std::vector<std::string> overrides = d.set;
-    std::string described;
-    for (std::size_t j = 0; j < m.keys.size(); ++j) {
-      overrides.push_back(m.keys[j] + "=" + points[p][j]);
-      described += (j ? ", " : "") + m.keys[j] + " = " + points[p][j];
-    }
+  const DesignPoints points(d);
+  const std::int64_t combinations = d.combinations();
+  std::unordered_set<std::uint64_t> hashes;  // the hashes' values (a million strings would be ~100 MB)
+  m.runs.reserve(static_cast<std::size_t>(std::min<std::int64_t>(combinations, std::int64_t{1} << 20)));
+  for (std::int64_t p = 0; p < combinations; ++p) {
+    // A stop requested while a big sweep is expanded ends it here, within a run's validation.
+    if (const int signal = interruption_requested()) throw Interrupted(signal);
+    SweepRun run;
+    run.index = static_cast<int>(m.runs.size());
+    run.values = points.values(p);
     LoadCase lc;
     try {
-      lc = read_load_case(d.base, overrides);
+      lc = read_load_case(d.base, m.overrides(run));
     } catch (const InputError& e) {  // a combination's problem is the sweep file's
-      throw InputError(d.file.string(), e.key(), fmt::format("{} (in run {} of the sweep: {})", e.problem(), p + 1, described));
+      std::string described;
+      for (std::size_t j = 0; j < m.keys.size(); ++j) described += (j ? ", " : "") + m.keys[j] + " = " + run.values[j];
+      throw InputError(d.file.string(), e.key(),
+                       fmt::format("{} (in run {} of the sweep: {})", e.problem(), run.index, described));
     }
-    SweepRun run;
     run.hash = case_hash(lc);
-    if (!hashes.insert(run.hash).second) {  // the same case twice (rounded integers, a repeated value)
+    if (!hashes.insert(std::stoull(run.hash, nullptr, 16)).second) {  // the same case twice (rounded integers, a repeated value)
       ++m.merged_duplicates;
       continue;
     }
-    run.index = static_cast<int>(m.runs.size());
-    run.values = points[p];
-    run.case_toml = to_toml(lc);
     m.runs.push_back(std::move(run));
   }
+  m.runs.shrink_to_fit();
   return m;
 }
 
-std::string SweepManifest::to_json() const {
-  nlohmann::ordered_json j;
-  j["indentsim_sweep"] = 1;
-  j["sweep"] = definition.file.string();
-  j["base"] = definition.base.string();
-  j["out"] = definition.out.string();
-  j["keep"] = definition.keep;
-  j["keys"] = keys;
-  j["runs"] = nlohmann::ordered_json::array();
-  for (const SweepRun& r : runs)
-    j["runs"].push_back({{"index", r.index}, {"hash", r.hash}, {"values", r.values}, {"case", r.case_toml}});
-  return j.dump(1) + "\n";
+std::vector<std::string> SweepManifest::overrides(const SweepRun& run) const {
+  std::vector<std::string> all = definition.set;
+  for (std::size_t j = 0; j < keys.size() && j < run.values.size(); ++j) all.push_back(keys[j] + "=" + run.values[j]);
+  return all;
 }
+
+std::string SweepManifest::run_case(const SweepRun& run) const {
+  if (!run.case_toml.empty()) return run.case_toml;
+  const LoadCase lc = read_load_case(definition.base, overrides(run));
+  if (const std::string hash = case_hash(lc); hash != run.hash)
+    throw InputError(definition.base.string(), "",
+                     fmt::format("no longer gives run {} of {} the case the sweep was expanded with (hash {}, not {}): "
+                                 "was the base case changed meanwhile? Start the sweep again",
+                                 run.index, definition.file.string(), hash, run.hash));
+  return to_toml(lc);
+}
+
+std::string SweepManifest::to_json() const { return manifest_json(*this, false); }
+std::string SweepManifest::to_json_with_cases() const { return manifest_json(*this, true); }
 
 SweepManifest SweepManifest::from_json(const std::string& text, const std::string& source) {
   try {
     const nlohmann::json j = nlohmann::json::parse(text);
-    if (j.at("indentsim_sweep").get<int>() != 1) throw InputError(source, "indentsim_sweep", "is not format 1");
+    const int format = j.at("indentsim_sweep").get<int>();
+    if (format != 1 && format != 2) throw InputError(source, "indentsim_sweep", "is not format 1 or 2");
     SweepManifest m;
     m.definition.file = j.at("sweep").get<std::string>();
     m.definition.base = j.at("base").get<std::string>();
     m.definition.out = j.at("out").get<std::string>();
     m.definition.keep = j.at("keep").get<std::vector<std::string>>();
+    if (format >= 2) m.definition.set = j.at("set").get<std::vector<std::string>>();
     m.keys = j.at("keys").get<std::vector<std::string>>();
     for (const auto& r : j.at("runs")) {
       SweepRun run;
       run.index = r.at("index").get<int>();
       run.hash = r.at("hash").get<std::string>();
       run.values = r.at("values").get<std::vector<std::string>>();
-      run.case_toml = r.at("case").get<std::string>();
+      if (format == 1) run.case_toml = r.at("case").get<std::string>();
+      else if (r.contains("case")) run.case_toml = r.at("case").get<std::string>();
       if (run.values.size() != m.keys.size()) throw InputError(source, "runs", "a run's values do not match the keys");
       m.runs.push_back(std::move(run));
     }

@@ -1,6 +1,6 @@
 #pragma once
 // A sweep on a Slurm cluster: one sbatch script whose job array runs the sweep's shards, array
-// task i running `indentsim sweep SWEEP --shard i/N` (sweep.hpp: runs i, i + N, ...).  Every
+// task i running `indentsim sweep SWEEP --shard i/N` (sweep.hpp: the runs whose 0-based index is i - 1 mod N).  Every
 // task writes its finished runs under their hashes (sweep_results.hpp), so a task that dies or
 // runs out of time is simply submitted again, and `--collect` builds the table at the end.
 #include <filesystem>
