@@ -1,15 +1,21 @@
 // The inverse problem (fit.hpp): parameters back from curves the model itself made for known
 // parameters with noise, from starts a factor 2 away; non-uniqueness reported where dimensional
 // analysis says it must be (a sharp cone's loading curve, P = C alpha^2, holds one number), and
-// resolved by a second data set; bad problems refused with the key named.
+// resolved by a second data set; bad problems refused with the key named; bad fits judged poor;
+// dense curves reduced to what the model resolves; a stop request honoured.
+#include <csignal>
 #include <cmath>
 #include <fstream>
+#include <random>
 #include <string>
 #include <vector>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "indentsim/base/error.hpp"
+#include "indentsim/base/interruption.hpp"
 #include "indentsim/fitting/fit.hpp"
 #include "indentsim/input/load_case.hpp"
 #include "test_support.hpp"
@@ -183,6 +189,126 @@ TEST(Fit, ConeBecomesIdentifiableWithItsImprint) {
   EXPECT_EQ(r.data[1].gradients, "forward sensitivities");  // through Ilyushin's unloading branch
 }
 
+TEST(Fit, ManyRowsAreReducedToOnePointPerIncrementWithTheTurningPointKept) {
+  // 10^5 noisy rows of a load-unload curve (to 50 um in the case's 20 increments of 2.5 um, back
+  // to 40 um) would be 10^5 increments of every forward run: reduced to one point per increment
+  // of each branch, the peak exact, each point the curve's value there with the noise averaged.
+  FitData d;
+  d.file = "dense.csv";
+  d.load_case = sphere(SceneKind::axisymmetric);
+  const auto loading = [](double a) { return 300.0 * std::pow(a / 50e-6, 1.5); };
+  const auto unloading = [](double a) { return 300.0 * std::pow((a - 35e-6) / 15e-6, 2.0); };
+  std::mt19937 random(7);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  // Depths with 1 nm of noise, but for the rows near the ends (the turning points are the rows'
+  // extremes); forces with 1.5 N, 0.5% of the peak.
+  const auto depth_noise = [&](int i, int n) { return i > 100 && i < n - 100 ? 1e-9 * noise(random) : 0.0; };
+  for (int i = 1; i <= 80000; ++i) {
+    const double a = 50e-6 * i / 80000;
+    d.abscissa.push_back(a + depth_noise(i, 80000));
+    d.values.push_back(loading(a) + 1.5 * noise(random));
+  }
+  for (int i = 1; i <= 20000; ++i) {
+    const double a = 50e-6 - 10e-6 * i / 20000;
+    d.abscissa.push_back(a + depth_noise(i, 20000));
+    d.values.push_back(unloading(a) + 1.5 * noise(random));
+  }
+  const double peak_depth = *std::max_element(d.abscissa.begin(), d.abscissa.end()), last_depth = d.abscissa.back();
+  const CurveReduction r = reduce_to_resolution(d);
+  EXPECT_TRUE(r.reduced);
+  EXPECT_EQ(r.rows, 100000u);
+  EXPECT_EQ(r.branches, 2);
+  EXPECT_EQ(d.rows, 100000u);
+  EXPECT_EQ(d.abscissa.size(), r.points);
+  EXPECT_EQ(r.points, 20u + 5u);  // 20 increments of loading; 4 of unloading, at least 5 points
+  EXPECT_NE(r.note.find("100000 rows"), std::string::npos) << r.note;
+  EXPECT_NE(r.note.find(fmt::format("{} points", r.points)), std::string::npos) << r.note;
+  EXPECT_NE(r.note.find("load.increments"), std::string::npos) << r.note;
+  // The turning point and the last depth are kept exactly; the path is loading, then unloading.
+  const auto peak = std::max_element(d.abscissa.begin(), d.abscissa.end());
+  EXPECT_EQ(*peak, peak_depth);
+  EXPECT_EQ(d.abscissa.back(), last_depth);
+  for (std::size_t i = 1; i < d.abscissa.size(); ++i)
+    EXPECT_EQ(d.abscissa[i] > d.abscissa[i - 1], i <= static_cast<std::size_t>(peak - d.abscissa.begin())) << i;
+  for (std::size_t i = 0; i < d.abscissa.size(); ++i) {
+    const bool loads = i <= static_cast<std::size_t>(peak - d.abscissa.begin());
+    const double exact = loads ? loading(d.abscissa[i]) : unloading(d.abscissa[i]);
+    // The rows' noise is 1.5; a point's (a quadratic through thousands of rows) 0.04 to 0.1.
+    EXPECT_NEAR(d.values[i], exact, 0.5) << "point " << i << " at " << d.abscissa[i];
+  }
+
+  // A curve with no more than two rows per increment, and an imprint, are left as they are.
+  FitData sparse;
+  sparse.load_case = sphere(SceneKind::axisymmetric);
+  sparse.abscissa = depths(50e-6, 40);
+  for (double a : sparse.abscissa) sparse.values.push_back(loading(a));
+  const FitData before = sparse;
+  EXPECT_FALSE(reduce_to_resolution(sparse).reduced);
+  EXPECT_EQ(sparse.abscissa, before.abscissa);
+  EXPECT_EQ(sparse.rows, 0u);
+  FitData imprint = d;
+  imprint.kind = FitDataKind::imprint_profile;
+  const std::size_t points = imprint.abscissa.size();
+  EXPECT_FALSE(reduce_to_resolution(imprint).reduced);
+  EXPECT_EQ(imprint.abscissa.size(), points);
+}
+
+TEST(Fit, ForcesAThousandTimesTooLargeAreAPoorFitAtABoundWithAUnitWarningNeverIdentifiable) {
+  // mN written as N: no yield stress in the bounds reaches forces 1000 times the model's.
+  const LoadCase truth = sphere(SceneKind::axisymmetric);
+  const std::vector<FreeParameter> free{yield_and_hardening[0]};
+  FitData d = synthetic_data(truth, FitDataKind::force_depth_curve, depths(20e-6, 8), free, 0.0, 1);
+  for (double& v : d.values) v *= 1e3;
+  d.load_case = started_away(truth, free, 2.0);
+  FitProblem problem;
+  problem.free = free;
+  problem.data.push_back(d);
+  std::vector<std::string> warned;
+  problem.settings.on_warning = [&](const std::string& w) { warned.push_back(w); };
+  const FitResult r = fit(problem);
+  print(r, free);
+  EXPECT_FALSE(r.good());
+  EXPECT_FALSE(r.identifiable);
+  EXPECT_EQ(r.quality.rfind("poor fit: rms ", 0), 0u) << r.quality;
+  EXPECT_NE(r.quality.find("of the peak force"), std::string::npos) << r.quality;
+  EXPECT_NE(r.quality.find("material.yield_stress at its upper bound 4e+09"), std::string::npos) << r.quality;
+  EXPECT_EQ(r.quality_problems.size(), 2u);
+  ASSERT_EQ(r.warnings.size(), 1u);
+  EXPECT_EQ(warned, r.warnings);
+  EXPECT_NE(r.warnings[0].find("force unit is probably wrong"), std::string::npos) << r.warnings[0];
+  EXPECT_NE(r.warnings[0].find("column \"P\" was read in N"), std::string::npos) << r.warnings[0];
+}
+
+TEST(Fit, AStopRequestEndsTheFitWithTheBestParametersSoFar) {
+  // SIGTERM's handler raises the interruption flag; here the first iteration raises it.
+  const LoadCase truth = sphere(SceneKind::axisymmetric);
+  const std::vector<FreeParameter> free{yield_and_hardening[0]};
+  FitData d = synthetic_data(truth, FitDataKind::force_depth_curve, depths(20e-6, 8), free, 0.0, 1);
+  d.load_case = started_away(truth, free, 2.0);
+  FitProblem problem;
+  problem.free = free;
+  problem.data.push_back(d);
+  problem.settings.starts = 3;
+  int iterations = 0;
+  problem.settings.on_iteration = [&](const FitProgress&) {
+    if (++iterations == 1) request_interruption(SIGTERM);
+  };
+  struct Lowered {
+    ~Lowered() { clear_interruption(); }
+  } lowered;
+  try {
+    fit(problem);
+    ADD_FAILURE() << "the fit did not stop";
+  } catch (const FitInterrupted& e) {
+    EXPECT_EQ(e.signal(), SIGTERM);
+    ASSERT_EQ(e.best().size(), 1u);  // the first start's first point: its cost is known
+    EXPECT_DOUBLE_EQ(e.best()[0], 800e6);
+    EXPECT_TRUE(std::isfinite(e.cost()));
+    EXPECT_EQ(e.phase(), "fine");  // 10 contact nodes: no coarse phase
+  }
+  EXPECT_EQ(iterations, 1);  // no start after the request
+}
+
 class FitCli : public testing::CliTest {
 protected:
   void SetUp() override {
@@ -194,6 +320,28 @@ protected:
   }
   std::string fit_args(const std::string& extra) const {
     return "fit " + (dir_ / "case.toml").string() + " --data " + (dir_ / "curve.csv").string() + " " + extra;
+  }
+  /// The case's own curve (a run, under a second): alpha [m] and P [N] at its 20 increments.
+  std::vector<std::pair<double, double>> run_curve() {
+    EXPECT_EQ(cli("run " + (dir_ / "case.toml").string() + " --quiet --out " + (dir_ / "run").string()), 0) << err();
+    std::vector<std::pair<double, double>> curve;
+    for (const auto& row : testing::read_curve(dir_ / "run" / "curve.csv")) curve.emplace_back(row[1], row[2]);
+    return curve;
+  }
+  /// Writes rows "alpha,P" (with `header`) to `name`, forces times `factor`.
+  std::string write_curve(const std::string& name, const std::vector<std::pair<double, double>>& curve,
+                          double factor = 1.0, const std::string& header = "alpha,P") {
+    std::ofstream out(dir_ / name);
+    out.precision(17);
+    out << header << "\n";
+    for (const auto& [a, P] : curve) out << a << "," << factor * P << "\n";
+    return (dir_ / name).string();
+  }
+  std::string fit_of(const std::string& curve, const std::string& extra) const {
+    return "fit " + (dir_ / "case.toml").string() + " --data " + curve + " --no-plot --free material.yield_stress " + extra;
+  }
+  nlohmann::json fit_json(const std::string& out) const {
+    return nlohmann::json::parse(testing::slurp(dir_ / out / "fit.json"));
   }
 };
 
@@ -223,6 +371,110 @@ TEST_F(FitCli, BadProblemsExitTwoNamingTheKeyBeforeAnyRun) {
   expect_refused("fit " + (dir_ / "typed.toml").string(), "fit.starts");
   std::ofstream(dir_ / "level.toml") << "[fit]\nfree = [\"material.n\"]\nsingle_level = 1\n[[data]]\ncase = \"case.toml\"\ncurve = \"curve.csv\"\n";
   expect_refused("fit " + (dir_ / "level.toml").string(), "fit.single_level");
+  // Bounds beyond the key's declared interval or beyond the magnitudes of solids (a unit slip).
+  expect_refused(fit_args("--free material.E --bounds material.E=1e9:1e300"), "material.E");
+  expect_refused(fit_args("--free material.E --bounds material.E=1e9:1e13"), "material.E");
+  expect_refused(fit_args("--free material.yield_stress --bounds material.yield_stress=1e6:1e12"), "material.yield_stress");
+  // A start outside the bounds is refused, not moved: the key, the start and the bounds named.
+  expect_refused(fit_args("--free material.yield_stress --bounds material.yield_stress=1e8:3e8"), "material.yield_stress");
+  EXPECT_NE(err().find("starts at 4e+08"), std::string::npos) << err();
+  EXPECT_NE(err().find("[1e+08, 3e+08]"), std::string::npos) << err();
+  expect_refused(fit_args("--free material.n --set material.n=0.7 --bounds material.n=0.01:0.6"), "material.n");
+  // Forces that pull: the sign convention of another instrument.
+  std::ofstream(dir_ / "negative.csv") << "alpha,P\n1e-5,-1\n2e-5,-3\n3e-5,-5.5\n";
+  expect_refused("fit " + (dir_ / "case.toml").string() + " --data " + (dir_ / "negative.csv").string() +
+                     " --free material.yield_stress",
+                 "negative");
+  // A unit of the other scene: forces (N) for a plane-strain case, N/m for an axisymmetric one.
+  std::ofstream(dir_ / "newtons.csv") << "alpha (m),P (N)\n1e-5,1\n2e-5,3\n3e-5,5.5\n";
+  expect_refused("fit " + (dir_ / "case.toml").string() + " --data " + (dir_ / "newtons.csv").string() +
+                     " --free material.yield_stress --set geometry.kind=plane_strain",
+                 "force_unit");
+  EXPECT_NE(err().find("plane strain"), std::string::npos) << err();
+  EXPECT_NE(err().find("in N ("), std::string::npos) << err();
+  std::ofstream(dir_ / "per_metre.csv") << "alpha (m),P (N/m)\n1e-5,1\n2e-5,3\n3e-5,5.5\n";
+  expect_refused("fit " + (dir_ / "case.toml").string() + " --data " + (dir_ / "per_metre.csv").string() +
+                     " --free material.yield_stress",
+                 "force_unit");
+  EXPECT_NE(err().find("axisymmetric"), std::string::npos) << err();
+}
+
+TEST_F(FitCli, ADenseCurveIsFittedAtThePointsTheModelResolvesAndSaysSo) {
+  // 2000 rows between the 20 increments of the case's own curve: without the reduction every run
+  // would solve 2000 increments (minutes); with it, about the case's own 20.
+  const auto curve = run_curve();
+  std::vector<std::pair<double, double>> dense;
+  for (int i = 1; i <= 2000; ++i) {
+    const double a = curve.back().first * i / 2000;
+    std::size_t k = 1;
+    while (k + 1 < curve.size() && curve[k].first < a) ++k;
+    const double t = (a - curve[k - 1].first) / (curve[k].first - curve[k - 1].first);
+    dense.emplace_back(a, (1.0 - t) * curve[k - 1].second + t * curve[k].second);
+  }
+  const std::string data = write_curve("dense.csv", dense);
+  ASSERT_EQ(cli(fit_of(data, "--set material.e0=0.0026 --out " + (dir_ / "dense").string()), "timeout 120"), 0)
+      << err();
+  EXPECT_NE(out().find("note: " + data + ": 2000 rows fitted as "), std::string::npos) << out();
+  const auto j = fit_json("dense");
+  EXPECT_EQ(j["data"][0]["rows"], 2000);
+  EXPECT_LE(j["data"][0]["points"].get<int>(), 21);
+  EXPECT_EQ(j["quality"], "good");
+  EXPECT_NEAR(j["parameters"]["material.yield_stress"]["value"].get<double>() / 400e6, 1.0, 0.03);
+}
+
+TEST_F(FitCli, ABadFitExitsThreeWithAWarningPerProblemAndItsVerdictInFitJson) {
+  // Forces in mN written as N: a unit warning before the fit, then a poor fit at a bound.
+  const std::string data = write_curve("milli.csv", run_curve(), 1e3);
+  EXPECT_EQ(cli(fit_of(data, "--set material.e0=0.0026 --quiet --out " + (dir_ / "poor").string())), 3)
+      << err();
+  EXPECT_NE(err().find("warning: " + data + ": its largest force"), std::string::npos) << err();
+  EXPECT_NE(err().find("force unit is probably wrong"), std::string::npos) << err();
+  EXPECT_NE(err().find("warning: poor fit: rms "), std::string::npos) << err();
+  EXPECT_NE(err().find("warning: poor fit: material.yield_stress at its upper bound"), std::string::npos) << err();
+  EXPECT_EQ(out().find("identifiable"), std::string::npos) << out();
+  EXPECT_NE(out().find("(quality: poor fit)"), std::string::npos) << out();
+  const auto j = fit_json("poor");
+  EXPECT_EQ(j["quality"].get<std::string>().rfind("poor fit: rms ", 0), 0u) << j["quality"];
+  EXPECT_EQ(j["quality_problems"].size(), 2u);
+  EXPECT_EQ(j["identifiable"], false);
+  EXPECT_EQ(j["warnings"].size(), 1u);
+}
+
+TEST_F(FitCli, FailedForwardRunsAreCountedInOwnWordsWithoutCeresLogLines) {
+  // The first forward run fails (injected, whatever its steps): the first start's first evaluation
+  // with it, which Ceres logs through glog; the second start fits.
+  const std::string data = write_curve("own.csv", run_curve());
+  const std::string args =
+      fit_of(data, "--set material.e0=0.0026 --bounds material.yield_stress=100e6:2e9 --starts 2 --out " +
+                       (dir_ / "counted").string());
+  ASSERT_EQ(cli(args, "INDENTSIM_FAULT=fit_run:1"), 0) << err();
+  EXPECT_NE(out().find("  1 forward run(s) failed even with steps a sixteenth as long"), std::string::npos) << out();
+  for (const char* glog : {"InitGoogleLogging", "trust_region_minimizer", "Terminating"})
+    EXPECT_EQ(err().find(glog), std::string::npos) << err();
+  EXPECT_EQ(fit_json("counted")["failed_runs"], 1);
+  EXPECT_EQ(fit_json("counted")["quality"], "good");
+  ASSERT_EQ(cli(args + " --quiet", "INDENTSIM_FAULT=fit_run:1"), 0) << err();
+  EXPECT_EQ(err(), "");  // -q: nothing but the result, warnings and errors
+  EXPECT_EQ(out().find("run(s) failed"), std::string::npos) << out();
+}
+
+TEST_F(FitCli, SigtermStopsTheFitWithTheBestParametersSoFarAndWritesNothing) {
+  // 30 starts of a few runs each take far longer than the wait for the first iteration's line.
+  const std::string data = write_curve("own.csv", run_curve());
+  const std::filesystem::path out = dir_ / "stopped";
+  const std::string errors = (dir_ / "err.txt").string();
+  const std::string command = "timeout 120 " + std::string(INDENTSIM_CLI) + " " +
+                              fit_of(data, "--set material.e0=0.0026 --starts 30 --out " + out.string()) +
+                              " >/dev/null 2>" + errors + " & pid=$!; for i in $(seq 1200); do grep -q iteration " +
+                              errors + " && break; sleep 0.05; done; kill -TERM $pid; wait $pid";
+  const int raw = std::system(("bash -c '" + command + "'").c_str());
+  ASSERT_TRUE(WIFEXITED(raw));
+  EXPECT_EQ(WEXITSTATUS(raw), 128 + SIGTERM) << err();
+  EXPECT_NE(err().find("fit stopped by signal 15"), std::string::npos) << err();
+  EXPECT_NE(err().find("the best parameters so far"), std::string::npos) << err();
+  EXPECT_NE(err().find("to fit again from there: --set material.e0="), std::string::npos) << err();  // the case gives e0
+  EXPECT_EQ(err().find("nothing to resume"), std::string::npos) << err();
+  EXPECT_FALSE(std::filesystem::exists(out / "fit.json"));
 }
 
 }  // namespace

@@ -12,12 +12,36 @@
 #include <Eigen/SVD>
 #include <ceres/ceres.h>
 #include <fmt/format.h>
+#include <glog/logging.h>
 
 #include "indentsim/base/error.hpp"
+#include "indentsim/base/interruption.hpp"
 
 namespace indentsim {
 
 namespace {
+
+/// Evaluations that failed, over every data set's cost function.
+struct EvaluationFailures {
+  int runs = 0;     ///< forward runs that failed even with their retries
+  int refused = 0;  ///< parameter combinations the model refuses
+};
+
+/// Ceres reports through glog, which writes to stderr whatever the caller asked for: a start
+/// whose first evaluation fails is an ERROR line ("Terminating: Residual and Jacobian evaluation
+/// failed.", after "Logging before InitGoogleLogging() is written to STDERR").  The fit counts
+/// failures and reports them in its own words, so glog is held to fatal errors while it works
+/// (messages below FLAGS_minloglevel are dropped before anything is written) and restored after.
+class QuietCeresLogging {
+public:
+  QuietCeresLogging() : previous_(FLAGS_minloglevel) { FLAGS_minloglevel = std::max<int>(previous_, google::GLOG_FATAL); }
+  ~QuietCeresLogging() { FLAGS_minloglevel = previous_; }
+  QuietCeresLogging(const QuietCeresLogging&) = delete;
+  QuietCeresLogging& operator=(const QuietCeresLogging&) = delete;
+
+private:
+  int previous_;
+};
 
 /// The residuals of one data set as a Ceres cost function of the scaled parameters x = theta / scale.
 /// Ceres asks for the residuals at a trial point and, once the point is accepted, for the
@@ -25,8 +49,8 @@ namespace {
 /// always carries its Jacobian (one factorization per data depth, far cheaper than a second run).
 class DataSetResiduals : public ceres::CostFunction {
 public:
-  DataSetResiduals(const ForwardModel& model, std::vector<double> scale, int& forward_runs)
-      : model_(model), scale_(std::move(scale)), forward_runs_(forward_runs) {
+  DataSetResiduals(const ForwardModel& model, std::vector<double> scale, int& forward_runs, EvaluationFailures& failures)
+      : model_(model), scale_(std::move(scale)), forward_runs_(forward_runs), failures_(failures) {
     const FitData& d = model.data();
     set_num_residuals(static_cast<int>(d.values.size()));
     mutable_parameter_block_sizes()->push_back(static_cast<int>(scale_.size()));
@@ -36,9 +60,11 @@ public:
   }
 
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
+    if (interruption_requested()) return false;  // the fit is stopping: no new run (fit() throws)
     std::vector<double> theta(scale_.size());
     for (std::size_t j = 0; j < theta.size(); ++j) theta[j] = parameters[0][j] * scale_[j];
     const bool want_jacobian = jacobians && jacobians[0];
+    if (failed_ && theta == failed_theta_) return false;  // the same run on the same mesh fails again
     if (!(cached_ && theta == cached_theta_ && (!want_jacobian || !cached_.jacobian.empty()))) {
       try {
         ModelEvaluation e = model_.evaluate(theta, want_jacobian || model_.uses_sensitivities());
@@ -47,9 +73,15 @@ public:
         cached_theta_ = theta;
       } catch (const SolverError&) {
         forward_runs_ += 3;
+        ++failures_.runs;
+        remember_failure(theta);
         return false;  // the optimiser shortens its step
       } catch (const InputError&) {
+        ++failures_.refused;
+        remember_failure(theta);
         return false;  // a parameter combination the model refuses (Ilyushin's admissibility)
+      } catch (const Interrupted&) {
+        return false;  // SIGINT or SIGTERM within the run: the callback ends the solve, fit() throws
       }
     }
     const FitData& d = model_.data();
@@ -61,8 +93,21 @@ public:
     return true;
   }
 
-  /// Forgets the kept evaluation: the model changed (its mesh was re-planned).
-  void forget() { cached_.valid = false; }
+  /// Forgets the kept evaluation and failure: the model changed (its mesh was re-planned).
+  void forget() {
+    cached_.valid = false;
+    failed_ = false;
+  }
+  /// The model's values at the scaled parameters x, evaluated as Ceres' first evaluation of a start
+  /// at x evaluates them (with the Jacobian), and kept for it; nullptr when the evaluation failed.
+  const std::vector<double>* values_at(const std::vector<double>& x) const {
+    std::vector<double> residuals(static_cast<std::size_t>(num_residuals()));
+    std::vector<double> jacobian(residuals.size() * scale_.size());
+    const double* parameters[] = {x.data()};
+    double* jacobians[] = {jacobian.data()};
+    if (!Evaluate(parameters, residuals.data(), jacobians)) return nullptr;
+    return &cached_.values;
+  }
   /// The last evaluation (model values and Jacobian in theta) if it was at theta with its Jacobian.
   const ModelEvaluation* evaluated_at(const std::vector<double>& theta) const {
     return cached_ && theta == cached_theta_ && !cached_.jacobian.empty() ? &cached_ : nullptr;
@@ -79,12 +124,19 @@ private:
       return *this;
     }
   };
+  void remember_failure(const std::vector<double>& theta) const {
+    failed_ = true;
+    failed_theta_ = theta;
+  }
   const ForwardModel& model_;
   std::vector<double> scale_;
   int& forward_runs_;
+  EvaluationFailures& failures_;
   double factor_ = 1.0;
   mutable Cache cached_;
   mutable std::vector<double> cached_theta_;
+  mutable bool failed_ = false;  ///< the last failed evaluation was at failed_theta_
+  mutable std::vector<double> failed_theta_;
 };
 
 class ProgressReporter : public ceres::IterationCallback {
@@ -98,6 +150,8 @@ public:
         forward_runs_(forward_runs),
         coarse_runs_(coarse_runs) {}
   ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
+    // SIGINT or SIGTERM: end the solve at the point reached (its cost stays usable); fit() throws.
+    if (interruption_requested()) return ceres::SOLVER_TERMINATE_SUCCESSFULLY;
     if (!settings_.on_iteration) return ceres::SOLVER_CONTINUE;
     progress_.iteration = s.iteration;
     progress_.cost = s.cost;
@@ -139,18 +193,49 @@ std::vector<double> spread_start(int k, const std::vector<FreeParameter>& free) 
   return theta;
 }
 
+/// The unit of a curve's forces in SI: N, or N/m in plane strain.
+const char* si_force_unit(const FitData& d) { return d.load_case.geometry.kind == SceneKind::plane_strain ? "N/m" : "N"; }
+
+/// The key's unit for messages (" Pa" for E and sigma_y).
+std::string unit_suffix(MaterialParameter p) {
+  return p == MaterialParameter::E || p == MaterialParameter::yield_stress ? " Pa" : "";
+}
+
 void check_problem(const FitProblem& problem) {
   if (problem.data.empty()) throw InputError("fit", "data", "no data to fit");
   if (problem.free.empty()) throw InputError("fit", "--free", "no parameter to fit");
+  // Forces push the punch in: P > 0.  A curve whose largest force is negative was exported with
+  // the other sign convention (or the column is another one); fitted, it ends at a bound.
+  for (const auto& d : problem.data) {
+    if (d.kind != FitDataKind::force_depth_curve || d.values.empty()) continue;
+    const double peak = *std::max_element(d.values.begin(), d.values.end(),
+                                          [](double a, double b) { return std::abs(a) < std::abs(b); });
+    if (peak < 0.0)
+      throw InputError(d.file, fmt::format("column \"{}\"", d.column),
+                       fmt::format("the force column is negative (its largest force is {:.4g} {}): indentsim's P is the "
+                                   "force pushing the punch in, positive; negate the column",
+                                   peak, si_force_unit(d)));
+  }
+  const LoadCase& first = problem.data.front().load_case;
   std::set<MaterialParameter> seen;
   std::size_t points = 0;
   for (const auto& d : problem.data) points += d.values.size();
   for (const auto& f : problem.free) {
     const std::string key = key_of(f.parameter);
+    const std::string unit = unit_suffix(f.parameter);
     if (!seen.insert(f.parameter).second) throw InputError("fit", key, "is listed twice among the free parameters");
     if ((f.parameter == MaterialParameter::e0 && seen.count(MaterialParameter::yield_stress)) ||
         (f.parameter == MaterialParameter::yield_stress && seen.count(MaterialParameter::e0)))
       throw InputError("fit", key, "material.e0 and material.yield_stress are one parameter: free one of them");
+    // The start: the first data set's value, within the magnitudes the key declares plausible
+    // (the default bounds are clipped to them) -- otherwise a unit slip is fitted.
+    const double start = value_of(first.material, f.parameter);
+    const auto plausible = plausible_magnitudes(key);
+    if (plausible && !(start >= plausible->low && start <= plausible->high))
+      throw InputError(first.source, key,
+                       fmt::format("starts at {:g}{} (the load case's value), outside {}, {:g} to {:g}{}: a fit "
+                                   "starts and stays within them (is the unit right?)",
+                                   start, unit, plausible->of_what, plausible->low, plausible->high, unit));
     const auto [low, high] = physical_range(f.parameter);
     if (!(f.lower < f.upper))
       throw InputError("fit", key, fmt::format("bounds {}:{} are reversed or empty (lower < upper needed)", f.lower, f.upper));
@@ -158,6 +243,32 @@ void check_problem(const FitProblem& problem) {
         f.upper == high)
       throw InputError("fit", key,
                        fmt::format("bounds {}:{} leave the physical range ({}, {})", f.lower, f.upper, low, high));
+    // Each bound a value the key accepts (its declared interval) and a solid plausibly has.
+    for (const auto& [which, bound] : {std::pair{"lower", f.lower}, std::pair{"upper", f.upper}}) {
+      if (const auto words = declared_interval_problem(key, bound))
+        throw InputError("fit", key,
+                         fmt::format("bounds {:g}:{:g}: the {} bound {}, as {} declares", f.lower, f.upper, which, *words, key));
+      if (plausible && !(bound >= plausible->low && bound <= plausible->high))
+        throw InputError("fit", key,
+                         fmt::format("bounds {:g}:{:g}: the {} bound lies outside {}, {:g} to {:g}{} (is the unit "
+                                     "right?)",
+                                     f.lower, f.upper, which, plausible->of_what, plausible->low, plausible->high, unit));
+      // sigma_y is e0 = sigma_y / (3 mu) to the law: a bound must give an elastic-limit strain.
+      if (f.parameter == MaterialParameter::yield_stress) {
+        const double e0 = e0_of_yield_stress(bound, first.material.E, first.material.nu);
+        if (const auto e0_words = declared_interval_problem("material.e0", e0))
+          throw InputError("fit", key,
+                           fmt::format("bounds {:g}:{:g}: the {} bound gives the elastic-limit strain e0 = sigma_y / "
+                                       "(3 mu) = {:.3g} with material.E = {:g} Pa and material.nu = {:g}, but material.e0 {}",
+                                       f.lower, f.upper, which, e0, first.material.E, first.material.nu, *e0_words));
+      }
+    }
+    // A start outside the bounds is refused, never moved: the fit would start elsewhere than told.
+    if (!(start >= f.lower && start <= f.upper))
+      throw InputError(first.source, key,
+                       fmt::format("starts at {:g}{} (the load case's value), outside its bounds [{:g}, {:g}]{}: set a start "
+                                   "inside them (in the load case, or with --set) or widen them (--bounds {}=lower:upper)",
+                                   start, unit, f.lower, f.upper, unit, key));
     for (const auto& d : problem.data) {
       const MaterialInput& m = d.load_case.material;
       const bool plastic_parameter = f.parameter == MaterialParameter::e0 || f.parameter == MaterialParameter::yield_stress ||
@@ -227,6 +338,7 @@ FitData synthetic_data(const LoadCase& truth, FitDataKind kind, const std::vecto
 
 FitResult fit(const FitProblem& problem) {
   const auto start_time = std::chrono::steady_clock::now();
+  const QuietCeresLogging quiet_logging;
   check_problem(problem);
   const std::size_t p = problem.free.size();
   // Named variables, not a structured binding: clang 14 cannot capture bindings in lambdas.
@@ -244,6 +356,25 @@ FitResult fit(const FitProblem& problem) {
 
   FitResult result;
   int forward_runs = 0, coarse_runs = 0;
+  EvaluationFailures failures;
+  const auto warn = [&](std::string warning) {
+    if (problem.settings.on_warning) problem.settings.on_warning(warning);
+    result.warnings.push_back(std::move(warning));
+  };
+  // SIGINT or SIGTERM: the run in progress throws Interrupted (caught by the cost function, whose
+  // later evaluations fail at once), the callback ends the solve, and the fit stops between solves
+  // with the lowest cost found so far (on the data sets' own meshes if any, else the coarse ones).
+  const auto interrupted_fit = [&](int signal) {
+    std::size_t k = best_start(result.starts, "fine");
+    if (k == result.starts.size()) k = best_start(result.starts, "coarse");
+    if (k == result.starts.size())
+      return FitInterrupted(signal, {}, std::numeric_limits<double>::quiet_NaN(), "", forward_runs, coarse_runs);
+    const StartOutcome& o = result.starts[k];
+    return FitInterrupted(signal, o.result, o.cost, o.phase, forward_runs, coarse_runs);
+  };
+  const auto stop_if_interrupted = [&] {
+    if (const int signal = interruption_requested()) throw interrupted_fit(signal);
+  };
   // The data sets' models on meshes with contact_nodes / divisor, planned at plan_at (empty:
   // at each case's own values), and their cost functions counting runs in `runs`.
   struct Level {
@@ -255,11 +386,44 @@ FitResult fit(const FitProblem& problem) {
     for (const auto& d : problem.data) {
       FitData data = d;
       data.load_case.mesh.contact_nodes = std::max(2, d.load_case.mesh.contact_nodes / divisor);
-      level.models.push_back(std::make_unique<ForwardModel>(std::move(data), parameters, bounds,
-                                                            problem.settings.finite_differences, plan_at));
-      level.costs.push_back(std::make_unique<DataSetResiduals>(*level.models.back(), scale, runs));
+      try {  // a plastic case's mesh is planned from a pilot run
+        level.models.push_back(std::make_unique<ForwardModel>(std::move(data), parameters, bounds,
+                                                              problem.settings.finite_differences, plan_at));
+      } catch (const Interrupted& e) {
+        throw interrupted_fit(e.signal());
+      }
+      level.costs.push_back(std::make_unique<DataSetResiduals>(*level.models.back(), scale, runs, failures));
     }
     return level;
+  };
+
+  // Before the first start: a curve whose forces are orders of magnitude off the model's at the
+  // start values was read in the wrong unit, most likely (mN written as N).  The evaluation is the
+  // first start's own first one (kept for it), so the check costs no run.
+  bool magnitudes_checked = false;
+  const auto check_magnitudes = [&](const Level& level) {
+    if (magnitudes_checked) return;
+    magnitudes_checked = true;
+    std::vector<double> x(p);
+    for (std::size_t j = 0; j < p; ++j) x[j] = case_start[j] / scale[j];
+    for (std::size_t d = 0; d < problem.data.size(); ++d) {
+      const FitData& data = problem.data[d];
+      if (data.kind != FitDataKind::force_depth_curve) continue;
+      const std::vector<double>* model = level.costs[d]->values_at(x);
+      if (!model) continue;
+      double data_peak = 0.0, model_peak = 0.0;
+      for (double v : data.values) data_peak = std::max(data_peak, std::abs(v));
+      for (double v : *model) model_peak = std::max(model_peak, std::abs(v));
+      if (!(data_peak > 0.0 && model_peak > 0.0)) continue;
+      const double ratio = data_peak / model_peak;
+      if (ratio <= unit_slip_factor && ratio >= 1.0 / unit_slip_factor) continue;
+      warn(fmt::format("{}: its largest force, {:.4g} {}, is {} the model's at the start values ({:.4g} {}): the force "
+                       "unit is probably wrong (column \"{}\" was read in {}; mN written as N gives 1000 times the "
+                       "force): give the right one (--force-unit, or force_unit in the fit file)",
+                       data.file, data_peak, si_force_unit(data),
+                       ratio > 1.0 ? fmt::format("{:.3g} times", ratio) : fmt::format("1/{:.3g} of", 1.0 / ratio),
+                       model_peak, si_force_unit(data), data.column, data.unit));
+    }
   };
 
   const auto solve_from = [&](const Level& level, const std::string& phase, const std::vector<double>& start,
@@ -327,17 +491,20 @@ FitResult fit(const FitProblem& problem) {
     for (int k = 0; k < starts; ++k) {
       const std::vector<double> start = k == 0 ? case_start : spread_start(k, problem.free);
       result.starts.push_back(solve_from(level, phase, start, k + 1, starts, problem.settings.max_iterations));
+      stop_if_interrupted();
     }
   };
   std::optional<Level> fine;
   if (coarse_first) {
     const Level coarse = make_level(2, {}, coarse_runs);
+    check_magnitudes(coarse);
     run_starts(coarse, "coarse");
     const std::size_t best = best_start(result.starts, "coarse");
     if (best < result.starts.size()) {
       const std::vector<double> coarse_optimum = result.starts[best].result;
       fine = make_level(1, coarse_optimum, forward_runs);
       result.starts.push_back(solve_from(*fine, "polish", coarse_optimum, 0, starts, problem.settings.max_iterations));
+      stop_if_interrupted();
       if (std::isfinite(result.starts.back().cost)) result.mesh_replanned = true;
       else fine.reset();
     }
@@ -345,6 +512,7 @@ FitResult fit(const FitProblem& problem) {
   bool replan = false;
   if (!fine) {
     fine = make_level(1, {}, forward_runs);
+    check_magnitudes(*fine);
     run_starts(*fine, "fine");
     replan = problem.settings.replan_mesh;
   }
@@ -361,7 +529,11 @@ FitResult fit(const FitProblem& problem) {
     bool changed = false;
     for (const auto& m : fine->models) {
       const double before = m->planned_contact_half_width();
-      m->replan_mesh(theta);
+      try {
+        m->replan_mesh(theta);
+      } catch (const Interrupted& e) {
+        throw interrupted_fit(e.signal());
+      }
       changed = changed || m->planned_contact_half_width() != before;
     }
     if (changed) {
@@ -373,6 +545,7 @@ FitResult fit(const FitProblem& problem) {
         result.selected_start = result.starts.size();
       }
       result.starts.push_back(std::move(polished));
+      stop_if_interrupted();
     }
   }
   const auto& models = fine->models;
@@ -389,7 +562,13 @@ FitResult fit(const FitProblem& problem) {
     const FitData& data = problem.data[d];
     // Ceres' last Jacobian is usually at the optimum already (sensitivities come with every run).
     const ModelEvaluation* kept = costs[d]->evaluated_at(theta);
-    const ModelEvaluation e = kept ? *kept : models[d]->evaluate(theta, true);
+    const ModelEvaluation e = kept ? *kept : [&] {
+      try {
+        return models[d]->evaluate(theta, true);
+      } catch (const Interrupted& stop) {
+        throw interrupted_fit(stop.signal());
+      }
+    }();
     if (!kept) forward_runs += e.forward_runs;
     const double factor = costs[d]->factor();
     DataSetFit out;
@@ -424,7 +603,7 @@ FitResult fit(const FitProblem& problem) {
   for (Eigen::Index k = 0; k < sigma.size(); ++k) result.singular_values.push_back(sigma[k]);
   const double smallest = sigma[sigma.size() - 1];
   result.condition_number = smallest > 0.0 ? sigma[0] / smallest : std::numeric_limits<double>::infinity();
-  result.identifiable = result.condition_number <= identifiability_condition_limit;
+  const bool well_conditioned = result.condition_number <= identifiability_condition_limit;
 
   // Covariance s2 (J^T J)^-1, through the SVD: cov(ln theta) = s2 V S^-2 V^T.
   const double dof = static_cast<double>(m_total) - static_cast<double>(p);
@@ -448,7 +627,7 @@ FitResult fit(const FitProblem& problem) {
   // The weakest combination, in words: scaled so that its largest component is 1%.
   const Eigen::VectorXd weak = v.col(pp - 1);
   for (Eigen::Index j = 0; j < pp; ++j) result.weakest_direction.push_back(weak[j]);
-  if (!result.identifiable && p > 1) {
+  if (!well_conditioned && p > 1) {
     const Eigen::Index lead = [&] {
       Eigen::Index k = 0;
       weak.cwiseAbs().maxCoeff(&k);
@@ -471,6 +650,36 @@ FitResult fit(const FitProblem& problem) {
         percent((relative * step).norm() / std::sqrt(weight_sum)), result.condition_number,
         identifiability_condition_limit);
   }
+
+  // The verdict: a misfit beyond poor_fit_rms_limit, or a parameter at a bound, is a poor fit.
+  for (std::size_t d = 0; d < result.data.size(); ++d) {
+    const double misfit = result.data[d].rms_relative;
+    if (misfit <= poor_fit_rms_limit) continue;  // NaN (no data) fails too
+    const bool curve = problem.data[d].kind == FitDataKind::force_depth_curve;
+    result.quality_problems.push_back(
+        fmt::format("{}rms {} of the {}",
+                    problem.data.size() > 1 ? fmt::format("data set {} ({}): ", d + 1, problem.data[d].file) : "",
+                    percent(misfit), curve ? "peak force" : "deepest imprint depth"));
+  }
+  for (std::size_t j = 0; j < p; ++j) {
+    const FreeParameter& f = problem.free[j];
+    const auto at = [&](double bound) {
+      const double width = f.upper - f.lower;
+      const double measure = bound != 0.0 ? std::min(std::abs(bound), width) : width;
+      return std::abs(theta[j] - bound) <= at_bound_tolerance * measure;
+    };
+    if (at(f.lower) || at(f.upper))
+      result.quality_problems.push_back(fmt::format("{} at its {} bound {:g}", key_of(f.parameter),
+                                                    at(f.lower) ? "lower" : "upper", at(f.lower) ? f.lower : f.upper));
+  }
+  if (!result.good()) {
+    result.quality = "poor fit";
+    for (std::size_t k = 0; k < result.quality_problems.size(); ++k)
+      result.quality += (k == 0 ? ": " : "; ") + result.quality_problems[k];
+  }
+  result.identifiable = well_conditioned && result.good();
+  result.failed_runs = failures.runs;
+  result.refused_evaluations = failures.refused;
   result.forward_runs = forward_runs;
   result.coarse_runs = coarse_runs;
   result.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_time).count();

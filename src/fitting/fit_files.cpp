@@ -120,12 +120,33 @@ FitData read_curve_data(const std::filesystem::path& file, LoadCase lc, CurveCol
     columns.depth_column = "alpha";
     columns.force_column = "P";
   }
+  // A plane-strain case's P is a force per unit thickness (N/m), an axisymmetric one's a force (N):
+  // a curve whose unit (given, or in its header) says the other is data of the other scene.
+  const bool plane_strain = lc.geometry.kind == SceneKind::plane_strain;
   columns.default_depth_unit = "m";
-  columns.default_force_unit = "N";
+  columns.default_force_unit = plane_strain ? "N/m" : "N";
+  columns.force_per_length = true;
   const LoadDepthCurve curve = read_curve_csv(file, columns);
+  if (curve.force_unit_declared && is_per_length_force_unit(curve.force_unit) != plane_strain) {
+    const std::string from = columns.force_unit.empty() ? "from the file's header" : "given by --force-unit or force_unit";
+    throw InputError(
+        file.string(), "force_unit",
+        plane_strain
+            ? fmt::format("the forces are in {} ({}), a force as an axisymmetric case or an instrument measures it, but "
+                          "the load case {} is plane strain (geometry.kind = \"plane_strain\"), whose P is a force per "
+                          "unit thickness in N/m: give the curve of a plane-strain scene in N/m, or fit these data with "
+                          "an axisymmetric case",
+                          printable(curve.force_unit, 20), from, lc.source)
+            : fmt::format("the forces are in {} ({}), a force per unit length as a plane-strain case gives it, but the "
+                          "load case {} is axisymmetric (geometry.kind = \"axisymmetric\"), whose P is a force in N: "
+                          "give the curve of an axisymmetric scene in N, or fit these data with a plane-strain case",
+                          printable(curve.force_unit, 20), from, lc.source));
+  }
   FitData d;
   d.kind = FitDataKind::force_depth_curve;
   d.file = file.string();
+  d.column = columns.force_column.empty() ? "2" : columns.force_column;
+  d.unit = curve.force_unit;
   d.load_case = std::move(lc);
   d.abscissa = curve.depth;
   d.values = curve.force;
@@ -292,6 +313,12 @@ FitJob read_fit_job(const FitCommandLine& cl) {
     throw InputError(problem.data.front().file, "data",
                      fmt::format("{} point(s) for {} free parameter(s): at least as many points as parameters", points,
                                  problem.free.size()));
+  // Each depth is an increment of every forward run: a curve of far more rows than the case has
+  // increments is reduced to what the model resolves (forward_model.hpp), and says so.
+  for (auto& d : problem.data) {
+    const CurveReduction reduction = reduce_to_resolution(d);
+    if (reduction.reduced) job.notes.push_back(reduction.note);
+  }
   return job;
 }
 
@@ -332,6 +359,10 @@ nlohmann::json fit_json(const FitProblem& problem, const FitResult& r) {
   j["weakest_direction"] = r.weakest_direction;
   j["poorly_determined"] = r.poorly_determined.empty() ? json(nullptr) : json(r.poorly_determined);
   j["rms_residual"] = {{"relative", r.rms_relative}};
+  j["quality"] = r.quality;
+  j["quality_problems"] = r.quality_problems;
+  j["quality_limits"] = {{"rms_relative", poor_fit_rms_limit}, {"at_bound", at_bound_tolerance}};
+  j["warnings"] = r.warnings;
   json data = json::array();
   for (std::size_t d = 0; d < problem.data.size(); ++d) {
     const auto& in = problem.data[d];
@@ -341,6 +372,7 @@ nlohmann::json fit_json(const FitProblem& problem, const FitResult& r) {
                     {"case", in.load_case.source},
                     {"kind", curve ? "force_depth_curve" : "imprint_profile"},
                     {"points", in.values.size()},
+                    {"rows", in.rows > 0 ? in.rows : in.values.size()},
                     {"weight", in.weight},
                     {"rms_residual", out.rms_residual},
                     {"rms_residual_unit", curve ? (in.load_case.geometry.kind == SceneKind::plane_strain ? "N/m" : "N") : "m"},
@@ -350,6 +382,8 @@ nlohmann::json fit_json(const FitProblem& problem, const FitResult& r) {
   }
   j["data"] = data;
   j["forward_runs"] = r.forward_runs;
+  j["failed_runs"] = r.failed_runs;
+  j["refused_evaluations"] = r.refused_evaluations;
   j["coarse_runs"] = r.coarse_runs;
   j["iterations"] = r.iterations;
   j["wall_s"] = r.wall_seconds;

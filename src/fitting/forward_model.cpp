@@ -4,9 +4,11 @@
 #include <cmath>
 #include <numeric>
 
+#include <Eigen/QR>
 #include <fmt/format.h>
 
 #include "indentsim/base/error.hpp"
+#include "indentsim/base/file_system.hpp"
 #include "indentsim/simulation/load_stepping.hpp"
 #include "indentsim/simulation/simulation.hpp"
 
@@ -45,7 +47,133 @@ std::optional<Bracket> bracket(const std::vector<double>& x, double x0) {
   return Bracket{k - 1, (x0 - x[k - 1]) / (x[k] - x[k - 1])};
 }
 
+/// The value at x0 of a curve given by rows (x, y) sorted by x, as reduce_to_resolution() takes
+/// it: a least-squares quadratic through the rows within `half_width` of x0 where there are at
+/// least 5 (linear, or their mean, should their depths not span one), else linear interpolation
+/// between the rows around x0; nullopt when x0 lies outside the rows' depths.
+std::optional<double> local_value(const std::vector<double>& x, const std::vector<double>& y, double x0,
+                                  double half_width) {
+  if (x.empty() || x0 < x.front() || x0 > x.back()) return std::nullopt;
+  const auto first = std::lower_bound(x.begin(), x.end(), x0 - half_width);
+  const auto last = std::upper_bound(x.begin(), x.end(), x0 + half_width);
+  const auto m = static_cast<Eigen::Index>(last - first);
+  if (m >= 5) {
+    const auto offset = static_cast<std::size_t>(first - x.begin());
+    Eigen::MatrixXd A(m, 3);
+    Eigen::VectorXd b(m);
+    for (Eigen::Index i = 0; i < m; ++i) {
+      const double u = (x[offset + static_cast<std::size_t>(i)] - x0) / half_width;
+      A(i, 0) = 1.0;
+      A(i, 1) = u;
+      A(i, 2) = u * u;
+      b[i] = y[offset + static_cast<std::size_t>(i)];
+    }
+    for (const Eigen::Index columns : {3, 2}) {
+      Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A.leftCols(columns));
+      qr.setThreshold(1e-10);
+      if (qr.rank() == columns) return qr.solve(b)[0];
+    }
+    return b.mean();  // a hold: the rows at one depth
+  }
+  if (x0 == x.back()) return y.back();
+  const std::size_t k = static_cast<std::size_t>(std::upper_bound(x.begin(), x.end(), x0) - x.begin());
+  const double t = x[k] > x[k - 1] ? (x0 - x[k - 1]) / (x[k] - x[k - 1]) : 0.5;
+  return (1.0 - t) * y[k - 1] + t * y[k];
+}
+
 }  // namespace
+
+CurveReduction reduce_to_resolution(FitData& data) {
+  CurveReduction r;
+  r.rows = r.points = data.abscissa.size();
+  if (data.kind != FitDataKind::force_depth_curve || data.abscissa.empty() || data.abscissa.size() != data.values.size())
+    return r;
+  const LoadCase& lc = data.load_case;
+  const int increments = std::max(1, total_increments(lc.load));
+  r.step = lc.max_depth() / increments;
+  if (!(r.step > 0.0)) return r;
+  const std::vector<double>& a = data.abscissa;
+
+  // The branches [begin, end) and their turning points: a reversal counts once the depth has come
+  // back from the branch's extreme by half an increment (finer wiggles the model does not resolve)
+  // and by 10 standard deviations of the depth's noise (the extremes of 10^5 noisy rows lie some
+  // 4.5 of them either side of the trend).  The noise from the steps between rows: a curve this
+  // dense moves little from one row to the next, so their spread about the median step is noise
+  // (1.4826 MAD / sqrt 2 for one depth).
+  struct Branch {
+    std::size_t begin = 0, end = 0, turn = 0;
+  };
+  std::vector<Branch> branches;
+  double noise = 0.0;
+  if (a.size() > 2) {
+    std::vector<double> steps(a.size() - 1);
+    for (std::size_t i = 1; i < a.size(); ++i) steps[i - 1] = a[i] - a[i - 1];
+    const auto middle = steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2);
+    std::nth_element(steps.begin(), middle, steps.end());
+    const double median = *middle;
+    for (double& d : steps) d = std::abs(d - median);
+    std::nth_element(steps.begin(), middle, steps.end());
+    noise = 1.4826 * *middle / std::sqrt(2.0);
+  }
+  const double tolerance = std::max(0.5 * r.step, 10.0 * noise);
+  std::size_t begin = 0, extreme = 0;
+  double direction = 1.0;  // a curve starts by loading from 0
+  for (std::size_t i = 1; i < a.size(); ++i) {
+    if (direction * (a[i] - a[extreme]) >= 0.0) {
+      extreme = i;
+    } else if (direction * (a[extreme] - a[i]) > tolerance) {
+      branches.push_back({begin, extreme + 1, extreme});
+      begin = extreme + 1;
+      direction = -direction;
+      extreme = i;  // the rows since the turning point all lie within the tolerance of it
+    }
+  }
+  branches.push_back({begin, a.size(), extreme});
+  r.branches = static_cast<int>(branches.size());
+
+  std::vector<double> depth, force;
+  double from = 0.0;  // the path starts at 0; each later branch at the turning point before it
+  for (const Branch& b : branches) {
+    const double to = a[b.turn];
+    const std::size_t rows = b.end - b.begin;
+    const int n = std::max(5, static_cast<int>(std::ceil(std::abs(to - from) / r.step - 1e-9)));
+    if (rows <= 2 * static_cast<std::size_t>(n) || to == from) {
+      depth.insert(depth.end(), a.begin() + static_cast<std::ptrdiff_t>(b.begin), a.begin() + static_cast<std::ptrdiff_t>(b.end));
+      force.insert(force.end(), data.values.begin() + static_cast<std::ptrdiff_t>(b.begin),
+                   data.values.begin() + static_cast<std::ptrdiff_t>(b.end));
+    } else {
+      std::vector<std::size_t> order(rows);
+      std::iota(order.begin(), order.end(), b.begin);
+      std::stable_sort(order.begin(), order.end(), [&](std::size_t i, std::size_t j) { return a[i] < a[j]; });
+      std::vector<double> x, y;
+      for (std::size_t i : order) {
+        x.push_back(a[i]);
+        y.push_back(data.values[i]);
+      }
+      const double half_width = 0.5 * std::abs(to - from) / n;
+      for (int k = 1; k <= n; ++k) {
+        const double target = k == n ? to : from + (to - from) * k / n;
+        if (const auto value = local_value(x, y, target, half_width)) {
+          depth.push_back(target);
+          force.push_back(*value);
+        }
+      }
+    }
+    from = to;
+  }
+  if (depth.size() >= a.size()) return r;
+  r.reduced = true;
+  r.points = depth.size();
+  data.rows = a.size();
+  data.abscissa = std::move(depth);
+  data.values = std::move(force);
+  r.note = fmt::format(
+      "{}: {} rows fitted as {} points ({} branch{}): one per increment of the load case where a branch had more "
+      "than two rows per increment ({} increments to {:.4g} m: the model resolves {:.3g} m), each a local quadratic "
+      "fit of the rows around it; raise load.increments to fit more points",
+      data.file, r.rows, r.points, r.branches, r.branches == 1 ? "" : "es", increments, lc.max_depth(), r.step);
+  return r;
+}
 
 ForwardModel::ForwardModel(FitData data, std::vector<MaterialParameter> parameters,
                            const std::vector<std::pair<double, double>>& bounds, bool finite_differences_only,
@@ -224,9 +352,11 @@ std::vector<double> ForwardModel::run(const LoadCase& lc, std::vector<std::vecto
   // A run that fails inside the fit is retried with steps a quarter, then a sixteenth as long;
   // one that still fails is reported as a failure (the optimiser then shortens its own step),
   // never as a result.
+  const bool injected = fault_due("fit_run");  // robustness tests: a run that fails whatever its steps
   for (int attempt = 0;; ++attempt) {
     ++runs;
     try {
+      if (injected) throw SolverError("injected failure of a fit's forward run (INDENTSIM_FAULT=fit_run)");
       return run_once(lc, 1 << (2 * attempt), jacobian);
     } catch (const SolverError&) {
       if (attempt == 2) throw;

@@ -79,11 +79,19 @@ std::pair<double, double> physical_range(MaterialParameter parameter) {
   return {0.0, inf};
 }
 
+std::pair<double, double> plausible_range(MaterialParameter parameter) {
+  if (const auto p = plausible_magnitudes(key_of(parameter))) return {p->low, p->high};
+  return physical_range(parameter);
+}
+
 std::pair<double, double> default_bounds(MaterialParameter parameter, double start) {
   switch (parameter) {
     case MaterialParameter::E:
-    case MaterialParameter::e0:
-    case MaterialParameter::yield_stress: return {start / 10.0, start * 10.0};
+    case MaterialParameter::yield_stress: {
+      const auto [low, high] = plausible_range(parameter);
+      return {std::max(start / 10.0, low), std::min(start * 10.0, high)};
+    }
+    case MaterialParameter::e0: return {start / 10.0, std::min(start * 10.0, 0.99)};
     case MaterialParameter::nu: return {0.0, 0.49};
     case MaterialParameter::kappa: return {0.0, 0.99};
     case MaterialParameter::n: return {0.01, 0.9};

@@ -44,7 +44,8 @@ private:
 /// true at the N-th time `event` happens in this process.  Events: "increment" (after the N-th
 /// reported increment; the CLI then kills itself), "checkpoint" (halfway through the N-th
 /// checkpoint write, likewise), "write" (the N-th write_all call fails with ENOSPC, as on a full
-/// disk).  Always false when the variable is unset.
+/// disk), "fit_run" (the N-th forward run of a fit fails, and so do its retries).  Always false
+/// when the variable is unset.
 bool fault_due(const char* event);
 /// Kills the process with SIGKILL when fault_due(event).
 void inject_fault(const char* event);

@@ -17,6 +17,12 @@
 //    with can pin it (measured: a sharp cone's loading curve, sigma_y with n: about 270; a
 //    sphere's: 30; a sphere and a cone together: 11-13; docs/verification.md).
 
+//
+// The fit's quality is judged too (FitResult::quality): a fit whose rms misfit exceeds
+// poor_fit_rms_limit of a data set's largest value, or that ends with a parameter at one of its
+// bounds, is a poor fit -- its values are no answer, whatever the condition number says -- and is
+// never called identifiable.
+
 #include <functional>
 #include <string>
 #include <utility>
@@ -24,12 +30,24 @@
 
 #include <Eigen/Core>
 
+#include "indentsim/base/interruption.hpp"
 #include "indentsim/fitting/forward_model.hpp"
 #include "indentsim/materials/material_parameter.hpp"
 
 namespace indentsim {
 
 inline constexpr double identifiability_condition_limit = 100.0;
+/// A fit whose rms misfit exceeds this fraction of a data set's largest value (the peak force, the
+/// deepest imprint depth) is a poor fit.  The model's own discretization error is 0.1-1% of P at
+/// the default mesh and instruments' noise a few percent: a tenth of the peak left unexplained
+/// means the model, its case or the data are wrong (a unit, a sign, the scene), not the noise.
+inline constexpr double poor_fit_rms_limit = 0.10;
+/// A parameter within this fraction of its bound (of the bound's magnitude, or of the box's
+/// width when smaller) ends "at" it: the optimum lies beyond the bounds, and the value is no answer.
+inline constexpr double at_bound_tolerance = 1e-3;
+/// A data set's largest force beyond this factor of the model's at the start values (either way)
+/// is a wrong unit most likely (mN read as N gives 1000): the fit warns before it starts.
+inline constexpr double unit_slip_factor = 100.0;
 /// The coarse phase (FitSettings::coarse_first) runs where every data set's mesh has at least
 /// this many contact nodes (half of them is then still a resolved contact).
 inline constexpr int coarse_first_min_contact_nodes = 12;
@@ -58,6 +76,8 @@ struct FitSettings {
   bool coarse_first = true;
   bool replan_mesh = true;     ///< without the coarse phase: re-plan the mesh at the result and polish
   std::function<void(const FitProgress&)> on_iteration;
+  /// Called with each warning as it arises (FitResult::warnings keeps them too).
+  std::function<void(const std::string&)> on_warning;
 };
 
 struct FitProblem {
@@ -93,6 +113,8 @@ struct FitResult {
   Eigen::MatrixXd covariance, correlation;
   std::vector<double> singular_values;  ///< of J diag(theta), largest first
   double condition_number = 0.0;
+  /// The condition number is within identifiability_condition_limit and the fit is good: a poor
+  /// fit is never called identifiable (its statistics describe a wrong optimum).
   bool identifiable = false;
   std::vector<double> weakest_direction;  ///< d ln theta of the weakest combination (unit norm)
   std::string poorly_determined;          ///< the weakest combination in words ("" if identifiable)
@@ -106,6 +128,44 @@ struct FitResult {
   std::vector<StartOutcome> starts;  ///< in the order run: coarse starts, then fine starts or the polish
   std::size_t selected_start = 0;    ///< the outcome the values come from
   bool mesh_replanned = false;  ///< the meshes were planned at a (coarse) result, not at the start
+  /// The verdict: "good", or "poor fit: " and the problems joined by "; ".
+  std::string quality = "good";
+  /// What makes it poor, one phrase each: "rms 64% of the peak force", "material.n at its upper
+  /// bound 0.9" (with "data set K (file): " before a misfit when there are several data sets).
+  std::vector<std::string> quality_problems;
+  bool good() const { return quality_problems.empty(); }
+  std::vector<std::string> warnings;  ///< before the fit (a unit that looks wrong), in order
+  /// Forward runs that failed even with steps a sixteenth as long (each counted once, its retries
+  /// not), and evaluations at parameters the model refuses (Ilyushin's admissibility): the
+  /// optimiser shortened its step each time.
+  int failed_runs = 0;
+  int refused_evaluations = 0;
+};
+
+/// A fit stopped by SIGINT or SIGTERM (interruption.hpp): what it had found until then.
+class FitInterrupted : public Interrupted {
+public:
+  FitInterrupted(int signal, std::vector<double> best, double cost, std::string phase, int forward_runs, int coarse_runs)
+      : Interrupted(signal),
+        best_(std::move(best)),
+        cost_(cost),
+        phase_(std::move(phase)),
+        forward_runs_(forward_runs),
+        coarse_runs_(coarse_runs) {}
+  /// The parameters of the lowest cost reached so far (in the order of problem.free), empty when no
+  /// start had reached a successful forward run.
+  const std::vector<double>& best() const { return best_; }
+  double cost() const { return cost_; }
+  /// Where that cost was reached: "coarse" (on the coarse phase's meshes), "fine" or "polish".
+  const std::string& phase() const { return phase_; }
+  int forward_runs() const { return forward_runs_; }
+  int coarse_runs() const { return coarse_runs_; }
+
+private:
+  std::vector<double> best_;
+  double cost_;
+  std::string phase_;
+  int forward_runs_, coarse_runs_;
 };
 
 /// The data a measurement of `truth` would give at `abscissa` (depths of a curve, or radii of an
@@ -115,9 +175,12 @@ struct FitResult {
 FitData synthetic_data(const LoadCase& truth, FitDataKind kind, const std::vector<double>& abscissa,
                        const std::vector<FreeParameter>& free, double noise, unsigned seed);
 
-/// Checks the problem (free keys, bounds inside the physical range and around sensible values,
-/// enough points) and fits.  Throws InputError for a problem that cannot be posed, SolverError when
-/// no start reaches a single successful evaluation.
+/// Checks the problem (free keys; bounds inside each key's declared interval and plausible range;
+/// the start inside the bounds; enough points; forces that push, not pull) and fits.  Throws
+/// InputError for a problem that cannot be posed, SolverError when no start reaches a single
+/// successful evaluation, FitInterrupted when SIGINT or SIGTERM stops it (interruption.hpp: the
+/// run in progress is abandoned within a Newton iteration).  Ceres' and glog's own logging is
+/// silenced (a failed run is counted in FitResult::failed_runs instead).
 FitResult fit(const FitProblem& problem);
 
 }  // namespace indentsim

@@ -13,6 +13,8 @@
 //   case = "sphere.toml"                        # relative to the fit file
 //   curve = "sphere.csv"                        # columns alpha [m] and P [N] unless told:
 //   depth_column = "Depth"  force_column = "Load"  depth_unit = "nm"  force_unit = "mN"
+//                                               # (plane strain: P in N/m, force_unit = "mN/m", ...;
+//                                               # a unit of the other scene is refused)
 //   weight = 1.0
 //   set = ["mesh.contact_nodes=16"]             # overrides of this data set's case
 //   [[data]]                                    # a residual imprint after unloading to 0
@@ -48,13 +50,17 @@ struct FitCommandLine {
 struct FitJob {
   FitProblem problem;
   std::string out_dir;
+  /// What was done to the data before the fit, one line each (a curve reduced to the points the
+  /// model resolves: reduce_to_resolution).
+  std::vector<std::string> notes;
 };
 
 /// Reads and checks everything a fit needs; throws InputError naming the file and the key.
 FitJob read_fit_job(const FitCommandLine& command_line);
 
 /// DIR/fit.json: parameters with standard errors and bounds, correlation, singular values,
-/// identifiability, residuals, forward runs, wall time, every start.
+/// identifiability, the quality verdict and warnings, residuals, forward runs (and failed ones),
+/// wall time, every start.
 nlohmann::json fit_json(const FitProblem& problem, const FitResult& result);
 /// DIR/fit_curves.csv: data set, abscissa, data, model, residual (SI), for the figure.
 std::string fit_curves_csv(const FitProblem& problem, const FitResult& result);

@@ -39,7 +39,32 @@ struct FitData {
   /// Curve: P [N; N/m in plane strain]; imprint: the residual depth below the original surface [m].
   std::vector<double> values;
   double weight = 1.0;  ///< multiplies this data set's residuals
+  /// Curve: the force column as the file names it, and the unit it was read in (for messages).
+  std::string column = "P", unit = "N";
+  /// The rows the file held, when reduce_to_resolution() replaced them by fewer points (else 0).
+  std::size_t rows = 0;
 };
+
+/// What reduce_to_resolution() did to a curve.
+struct CurveReduction {
+  bool reduced = false;
+  std::size_t rows = 0, points = 0;  ///< before and after
+  int branches = 0;                  ///< loading and unloading branches found
+  double step = 0.0;                 ///< the load case's increment length [m]
+  std::string note;                  ///< one line: what was done and why ("" when nothing was)
+};
+
+/// A force-depth curve with many more rows than the model resolves, reduced to what it does.
+/// Every data depth is a waypoint of the fit's forward runs, so a curve of 10^5 rows would cost
+/// 10^5 increments per run where the load case asks for tens.  The curve is split into its
+/// branches (loading, unloading, reloading: a reversal counts once the depth has come back by half
+/// an increment and by 10 standard deviations of the depths' noise), and a branch holding more than two rows per increment of the load case (of
+/// length max depth / load.increments) is replaced by one point per increment (at least 5), evenly
+/// spaced from the branch's first depth to its turning point (kept exactly), each the value at that
+/// depth of a least-squares quadratic through the rows within half a spacing of it (the rows' noise
+/// averaged, the curve's curvature kept; linear interpolation where fewer than 5 rows lie there).
+/// Branches with fewer rows, and imprints, are left as they are.
+CurveReduction reduce_to_resolution(FitData& data);
 
 /// The model at the data points, and its derivatives if asked.
 struct ModelEvaluation {

@@ -30,8 +30,12 @@ void set_value(MaterialInput& material, MaterialParameter parameter, double valu
 /// The open interval of values the model accepts: E > 0, -1 < nu < 0.5, e0 and sigma_y > 0,
 /// kappa in [0, 1), n in (0, 1).  A bound outside it is refused.
 std::pair<double, double> physical_range(MaterialParameter parameter);
+/// The closed interval of values a solid plausibly has: the magnitudes the key's declaration states
+/// (plausible_magnitudes: E 1e3 to 2e12 Pa, sigma_y 1e5 to 3e10 Pa), else the physical range.  A
+/// fit's bounds must lie within it (and within the key's declared interval).
+std::pair<double, double> plausible_range(MaterialParameter parameter);
 /// Default fit bounds around a start value: a factor 10 either way for E, e0 and sigma_y (within the
-/// physical range), nu in [0, 0.49], kappa in [0, 0.99], n in [0.01, 0.9].
+/// plausible range; e0 below 0.99), nu in [0, 0.49], kappa in [0, 0.99], n in [0.01, 0.9].
 std::pair<double, double> default_bounds(MaterialParameter parameter, double start);
 
 }  // namespace indentsim
