@@ -5,6 +5,7 @@ Run by ctest with Debian's python3:  test_python.py INDENTSIM_CLI SOURCE_DIR [un
 theory: the module must be the same code, not a second opinion.
 """
 import csv
+import importlib.util
 import json
 import os
 import shutil
@@ -21,7 +22,7 @@ import unittest
 import numpy as np
 
 import indentsim
-from indentsim.sweep import sweep
+from indentsim.sweep import read_table, sweep
 
 CLI = SOURCE = None
 PYTHON = sys.executable
@@ -256,6 +257,263 @@ class DaskSweep(Temporary):
         p = subprocess.run([CLI, "sweep", file, "--dask"], capture_output=True, text=True)
         self.assertEqual(p.returncode, 2)
         self.assertFalse(os.path.exists(self.path("never")))
+
+
+# A case that runs for minutes unless stopped: 2000 increments of about 0.05 s each.
+SLOW = {"load.increments": 2000, "mesh.error_estimate": "off"}
+
+STOP_BY_SIGINT = r"""
+import json, signal, sys
+import indentsim
+signal.signal(signal.SIGINT, signal.default_int_handler)  # as in a terminal, even when started with SIGINT ignored
+case, out, increments = sys.argv[1], sys.argv[2], int(sys.argv[3])
+print("starting", flush=True)
+try:
+    indentsim.run(case, overrides={"load.increments": increments, "mesh.error_estimate": "off"}, out=out)
+    print(json.dumps({"raised": None}), flush=True)
+except BaseException as e:
+    r = getattr(e, "result", None)
+    print(json.dumps({"raised": type(e).__name__, "keyboard_interrupt": isinstance(e, KeyboardInterrupt),
+                      "message": str(e), "status": r.status if r else None,
+                      "last_step": int(r.curve["step"][-1]) if r else None}), flush=True)
+"""
+
+
+def python_without_numpy():
+    """Another python3 on the PATH (a pyenv or venv one) that cannot import NumPy, or None."""
+    mine = os.path.realpath(sys.executable)
+    for folder in os.environ.get("PATH", "").split(os.pathsep):
+        candidate = os.path.join(folder, "python3")
+        if not os.access(candidate, os.X_OK) or os.path.realpath(candidate) == mine:
+            continue
+        try:
+            p = subprocess.run([candidate, "-c", "import numpy"], capture_output=True, timeout=60)
+        except (OSError, subprocess.TimeoutExpired):
+            continue
+        if p.returncode != 0:
+            return candidate
+    return None
+
+
+def example_module(name):
+    """examples/NAME.py as a module (its main() does not run on import)."""
+    spec = importlib.util.spec_from_file_location(name, os.path.join(SOURCE, "examples", f"{name}.py"))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+class ImportWithTheWrongPython(unittest.TestCase):
+    def import_error(self, *command):
+        p = subprocess.run([*command, "-c", "import indentsim"], capture_output=True, text=True, timeout=120)
+        self.assertNotEqual(p.returncode, 0, p.stdout)
+        return p.stderr
+
+    def test_a_python_without_numpy_is_told_which_python_and_how_to_use_it(self):
+        # Debian's python3 without its site packages (-S) is a Python without NumPy, always at hand.
+        message = self.import_error(sys.executable, "-S")
+        self.assertIn("ImportError: indentsim cannot be imported by this Python: NumPy cannot be imported", message)
+        self.assertIn(sys.executable, message)
+        self.assertIn(f"indentsim needs: CPython {sys.version_info.major}.{sys.version_info.minor} on ", message)
+        self.assertIn("/usr/bin/python3 -m venv --system-site-packages ENV", message)
+
+    def test_another_python_on_the_path_is_named_next_to_the_one_indentsim_needs(self):
+        other = python_without_numpy()
+        if other is None:
+            self.skipTest("no python3 without NumPy on the PATH besides this one")
+        executable = subprocess.run([other, "-c", "import sys; print(sys.executable)"], capture_output=True,
+                                    text=True, timeout=60).stdout.strip()
+        message = self.import_error(other)
+        print(f"\n{other} ({executable}):\n" + "\n".join(message.strip().splitlines()[-4:-1]))
+        self.assertIn("indentsim cannot be imported by this Python", message)
+        self.assertIn(f"this Python:     {executable}:", message)
+        self.assertIn(f"CPython {sys.version_info.major}.{sys.version_info.minor} on ", message)
+        self.assertIn("--system-site-packages", message)
+
+
+class Stop(Temporary):
+    def test_ctrl_c_stops_a_run_and_raises_with_its_converged_increments(self):
+        case = os.path.join(SOURCE, "loadcases", "power_law.toml")
+        out = self.path("stopped")
+        child = subprocess.Popen([PYTHON, "-c", STOP_BY_SIGINT, case, out, str(SLOW["load.increments"])],
+                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        try:
+            self.assertEqual(child.stdout.readline().strip(), "starting")
+            time.sleep(1.5)
+            child.send_signal(signal.SIGINT)
+            signalled = time.monotonic()
+            stdout, stderr = child.communicate(timeout=120)
+        finally:
+            if child.poll() is None:
+                child.kill()
+                child.wait()
+        stopped_within = time.monotonic() - signalled
+        self.assertEqual(child.returncode, 0, stderr)
+        outcome = json.loads(stdout.strip().splitlines()[-1])
+        print(f"\nstopped {stopped_within:.2f} s after SIGINT at increment {outcome['last_step']}: {outcome['message']}")
+        self.assertEqual(outcome["raised"], "RunInterrupted")
+        self.assertTrue(outcome["keyboard_interrupt"])
+        self.assertEqual(outcome["status"], "stopped")
+        self.assertLess(outcome["last_step"], SLOW["load.increments"])
+        self.assertIn("indentsim resume", outcome["message"])
+        self.assertLess(stopped_within, 30.0)
+        with open(os.path.join(out, "summary.json")) as f:
+            self.assertEqual(json.load(f)["status"], "stopped")
+        self.assertTrue(any(name.endswith(".ck") for name in os.listdir(os.path.join(out, "checkpoints"))))
+
+    def test_request_stop_stops_a_run_in_a_worker_thread_and_no_later_run(self):
+        case = os.path.join(SOURCE, "loadcases", "power_law.toml")
+        caught = {}
+
+        def solve():
+            try:
+                indentsim.run(case, overrides=SLOW, out=self.path("worker"))
+            except BaseException as e:
+                caught["error"] = e
+        worker = threading.Thread(target=solve)
+        worker.start()
+        time.sleep(1.0)
+        self.assertTrue(indentsim.request_stop())
+        worker.join(timeout=120)
+        self.assertFalse(worker.is_alive())
+        error = caught.get("error")
+        self.assertIsInstance(error, indentsim.RunInterrupted)
+        self.assertEqual(error.result.status, "stopped")
+        self.assertLess(error.result.curve["step"][-1], SLOW["load.increments"])
+        self.assertFalse(indentsim.request_stop())  # nothing in progress: nothing to stop, nothing left behind
+        self.assertEqual(indentsim.run(self.base).status, "finished")
+
+
+class WriteIntoAFolder(Temporary):
+    def test_write_replaces_an_earlier_runs_files_and_leaves_other_files(self):
+        earlier = self.path("earlier")
+        p = cli("run", self.base, "--quiet", "--out", earlier, "--set", "output.fields_every=1",
+                "--set", "output.checkpoint_every=1")
+        self.assertEqual(p.returncode, 0, p.stderr)
+        self.assertGreater(len(os.listdir(os.path.join(earlier, "fields"))), 1)
+        self.assertTrue(os.listdir(os.path.join(earlier, "checkpoints")))
+        with open(os.path.join(earlier, "notes.txt"), "w") as f:
+            f.write("mine\n")
+        r = indentsim.run(self.base, overrides={"load.increments": 2})  # fields: the final state only
+        self.assertEqual(r.write(earlier), earlier)
+        self.assertEqual(sorted(os.listdir(os.path.join(earlier, "fields"))),
+                         sorted(os.listdir(os.path.join(r.folder, "fields"))))
+        for name in ("fields.pvd", "curve.csv", "summary.json", "case.toml"):
+            with open(os.path.join(earlier, name)) as a, open(os.path.join(r.folder, name)) as b:
+                self.assertEqual(a.read(), b.read(), name)
+        checkpoints = os.path.join(earlier, "checkpoints")
+        self.assertFalse(os.path.isdir(checkpoints) and os.listdir(checkpoints))
+        with open(os.path.join(earlier, "notes.txt")) as f:
+            self.assertEqual(f.read(), "mine\n")
+
+    def test_write_refuses_a_folder_a_cli_run_holds(self):
+        r = indentsim.run(self.base)
+        busy = self.path("busy")
+        run = subprocess.Popen([CLI, "run", os.path.join(SOURCE, "loadcases", "power_law.toml"), "--quiet",
+                                "--out", busy, "--set", "load.increments=2000", "--set", "mesh.error_estimate=\"off\""],
+                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        try:
+            deadline = time.monotonic() + 60
+            while not os.path.isfile(os.path.join(busy, "curve.csv")) and time.monotonic() < deadline:
+                time.sleep(0.02)
+            before = sorted(os.listdir(busy))
+            with self.assertRaises(indentsim.InputError) as caught:
+                r.write(busy)
+            self.assertEqual(run.poll(), None, "the CLI run ended before write() was tried")
+            self.assertIn(f'"{busy}" is in use by another indentsim run (pid {run.pid})', str(caught.exception))
+            self.assertEqual(sorted(os.listdir(busy)), before)
+        finally:
+            run.terminate()
+            run.wait()
+
+
+class Study(Temporary):
+    # Two unloading increments: Oliver-Pharr's fit needs at least 4 points, so the branch is not analysed.
+    UNANALYSABLE = {"load.path": [0.0, 2e-5, 0.0], "load.increments": [3, 2]}
+
+    def test_the_study_gives_nan_and_the_reason_for_a_branch_that_could_not_be_analysed(self):
+        r = indentsim.run(self.base, overrides=self.UNANALYSABLE)
+        self.assertIsNone(r.summary["unloading"][0]["analysis"])
+        study = example_module("hardness_study")
+        hardness, why = study.hardness_of(r.summary)
+        self.assertTrue(np.isnan(hardness))
+        self.assertIn("needs at least 4", why)
+        self.assertEqual(study.hardness_of(indentsim.run(self.base).summary)[1], "no unloading branch")
+
+    def test_a_sweeps_table_reads_with_nan_where_a_run_has_no_hardness_and_keeps_each_message(self):
+        file = self.write_sweep("study.toml", self.path("study"),
+                                '"load.increments" = [5, 40]\n"solver.max_newton" = [1, 50]\n',
+                                '[set]\n"load.path" = [0.0, 2e-5, 0.0]\n"solver.max_cutbacks" = 0\n')
+        p = cli("sweep", file, "--quiet")
+        self.assertEqual(p.returncode, 0, p.stderr)
+        table = read_table(self.path("study", "results.csv"))
+        self.assertEqual(table["H"].dtype, np.float64)
+        self.assertEqual(list(table["index"]), [0, 1, 2, 3])
+        study = example_module("hardness_study")
+        for k in range(4):
+            status, increments = table["status"][k], table["load.increments"][k]
+            with self.subTest(status=status, increments=increments):
+                if status == "finished" and increments == 40:
+                    self.assertGreater(table["H"][k], 0.0)
+                    continue
+                self.assertTrue(np.isnan(table["H"][k]))
+                why = study.why_no_hardness(table, k, self.path("study"))
+                if status == "finished":
+                    self.assertIn("needs at least 4", why)
+                else:
+                    self.assertEqual(status, "not_converged")
+                    self.assertTrue(table["message"][k])
+                    self.assertEqual(why, f"not_converged: {table['message'][k]}")
+
+
+class CaseValues(Temporary):
+    def small_case(self):
+        return tomllib.loads(SMALL_CASE)
+
+    def test_a_lone_surrogate_is_refused_naming_its_key_and_nothing_else(self):
+        case = self.small_case()
+        case["material"]["model"] = "elastic\ud800"
+        with self.assertRaises(indentsim.InputError) as caught:
+            indentsim.check(case)
+        message = str(caught.exception)
+        self.assertTrue(message.startswith("case: material.model: "), message)
+        self.assertIn("lone surrogate", message)
+        self.assertNotIn("[geometry]", message)
+        with self.assertRaises(indentsim.InputError) as caught:
+            indentsim.run(self.base, overrides={"output.dir": "out\udcff"})
+        self.assertTrue(str(caught.exception).startswith("overrides: output.dir: "), str(caught.exception))
+
+    def test_an_integer_beyond_64_bits_is_refused_naming_its_key_and_the_float_to_write(self):
+        case = self.small_case()
+        case["material"]["E"] = 10**30
+        with self.assertRaises(indentsim.InputError) as caught:
+            indentsim.run(case)
+        self.assertEqual(str(caught.exception), "case: material.E: the integer 1000000000000000000000000000000 does "
+                                                "not fit a 64-bit integer (TOML's); write it as a float (1e+30)")
+        with self.assertRaises(indentsim.InputError) as caught:
+            indentsim.check(self.base, overrides={"load.increments": np.uint64(2**64 - 1)})
+        self.assertTrue(str(caught.exception).startswith("overrides: load.increments: the integer 18446744073709551615"))
+        # The largest 64-bit integer is TOML: the library judges it (out of range, by name).
+        with self.assertRaises(indentsim.InputError) as caught:
+            indentsim.check(self.base, overrides={"load.increments": 2**63 - 1})
+        self.assertNotIn("line", str(caught.exception))
+        self.assertIn("load.increments", str(caught.exception))
+
+    def test_fit_takes_one_key_or_one_bounds_text_as_a_list_of_one(self):
+        data_run = self.path("data")
+        self.assertEqual(cli("run", self.base, "--quiet", "--out", data_run).returncode, 0)
+        data = os.path.join(data_run, "curve.csv")
+        # material.E is free, material.nu is not: the library names the bounds' key, after reading free whole.
+        for bounds in ({"material.nu": (0.1, 0.4)}, "material.nu=0.1:0.4", ["material.nu=0.1:0.4"]):
+            with self.subTest(bounds=bounds), self.assertRaises(indentsim.InputError) as caught:
+                indentsim.fit(self.base, data=data, free="material.E", bounds=bounds, out=self.path("fit"))
+            self.assertEqual(str(caught.exception), "--bounds: material.nu: has bounds but is not free")
+        with self.assertRaises(indentsim.InputError) as caught:
+            indentsim.fit(self.base, data=data, free="material.E", starts="3")
+        self.assertEqual(str(caught.exception), "starts: must be an integer (got '3')")
+        with self.assertRaises(indentsim.InputError) as caught:
+            indentsim.fit(self.base, data=data, free="material.E", bounds={"material.E": 5e9})
+        self.assertIn("bounds: material.E: expects (lower, upper)", str(caught.exception))
 
 
 def free_port():

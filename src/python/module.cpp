@@ -2,13 +2,16 @@
 // Every call is the library's own, as the CLI makes it; the GIL is released while C++ works
 // (nothing in the released sections touches a Python object), so runs in Python threads solve
 // in parallel.  The library's errors become Python exceptions carrying the CLI's message:
-// InputError (a ValueError), IoError (an OSError), SolverError (a RuntimeError).
+// InputError (a ValueError), IoError (an OSError), SolverError (a RuntimeError); a stop request
+// that ends a call before it has anything to return, KeyboardInterrupt.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <csignal>
 #include <filesystem>
 #include <fstream>
+#include <mutex>
 #include <sstream>
 #include <string>
 #include <tuple>
@@ -18,6 +21,8 @@
 
 #include "indentsim/analysis/curve_analysis.hpp"
 #include "indentsim/base/error.hpp"
+#include "indentsim/base/interruption.hpp"
+#include "indentsim/output/run_folder.hpp"
 #include "indentsim/output/fields.hpp"
 #include "indentsim/fitting/fit.hpp"
 #include "indentsim/fitting/fit_files.hpp"
@@ -33,6 +38,37 @@ namespace fs = std::filesystem;
 using namespace indentsim;
 
 namespace {
+
+/// The library's work in progress in this process (runs, fits, sweep batches), for request_stop().
+/// A stop request is the library's interruption flag (interruption.hpp), the one SIGINT raises in
+/// the CLI and every run polls.  It is raised only while work is in progress and lowered when the
+/// last of it ends, so that a request never stops a later call.
+std::mutex work_mutex;
+int work_in_progress = 0;
+
+class WorkInProgress {
+public:
+  WorkInProgress() {
+    const std::lock_guard<std::mutex> lock(work_mutex);
+    ++work_in_progress;
+  }
+  ~WorkInProgress() {
+    const std::lock_guard<std::mutex> lock(work_mutex);
+    if (--work_in_progress == 0) clear_interruption();
+  }
+  WorkInProgress(const WorkInProgress&) = delete;
+  WorkInProgress& operator=(const WorkInProgress&) = delete;
+};
+
+/// request_stop(): the work in progress stops as the CLI stops on SIGINT (a run after its last
+/// converged increment, checkpointed, with status "stopped").  False when nothing was in progress:
+/// nothing is stopped and no request is left behind.  Called with the GIL held, from any thread.
+bool request_stop() {
+  const std::lock_guard<std::mutex> lock(work_mutex);
+  if (work_in_progress == 0) return false;
+  request_interruption(SIGINT);
+  return true;
+}
 
 /// A run's end as Python sees it, with the final state's fields on the nodes.
 struct PythonRun {
@@ -82,6 +118,7 @@ PythonRun finish(const RunReport& report, PythonRun run) {
 PythonRun run_case(const std::string& file, const std::string& toml_text, const std::string& source,
                    std::vector<std::string> overrides, const std::string& out) {
   py::gil_scoped_release unlocked;
+  const WorkInProgress working;  // a stop request ends the run with status "stopped"
   overrides.push_back("output.dir=" + toml_string(out));
   const LoadCase lc = file.empty() ? parse_load_case(toml_text, source, overrides) : read_load_case(file, overrides);
   PythonRun run;
@@ -129,18 +166,38 @@ std::string analyze(const std::string& curve, const std::vector<std::string>& ov
 /// written into the job's folder, as `indentsim fit` writes them.
 std::string fit_curves(FitCommandLine command_line) {
   py::gil_scoped_release unlocked;
+  const WorkInProgress working;
   FitJob job = read_fit_job(command_line);
   const FitResult result = fit(job.problem);
   write_fit_results(job.out_dir, job.problem, result);
   return fit_json(job.problem, result).dump(2) + "\n";
 }
 
-/// A sweep expanded (and validated): manifest.json's text, written into its folder.
+/// A sweep expanded (and validated), its compact manifest.json written into its folder; returned:
+/// the manifest with every run's complete case ("case"), which the batches hand the workers.  A
+/// run folder whose result.json is no result of its run (damaged, another run's, its files not as
+/// recorded) is removed, with a warning on stderr naming the file and what is wrong, so that the
+/// sweep does the run again (as `indentsim sweep` does).
 std::string sweep_manifest(const std::string& file) {
-  py::gil_scoped_release unlocked;
-  const SweepManifest manifest = expand_sweep(read_sweep_definition(file));
-  SweepResults(manifest.definition.out).write_manifest(manifest);
-  return manifest.to_json();
+  std::string text;
+  std::vector<std::string> problems;
+  {
+    py::gil_scoped_release unlocked;
+    const SweepManifest manifest = expand_sweep(read_sweep_definition(file));
+    const SweepResults results(manifest.definition.out);
+    results.write_manifest(manifest);
+    for (const SweepRun& run : manifest.runs) {
+      const SweepRunLookup found = results.look_up(run.hash);
+      if (found.problem.empty()) continue;
+      problems.push_back(fmt::format("{}: {}; run {} is done again", found.file.string(), found.problem, run.index));
+      std::error_code ec;
+      fs::remove_all(found.file.parent_path(), ec);
+    }
+    text = manifest.to_json_with_cases();
+  }
+  const py::object stderr_file = py::module_::import("sys").attr("stderr");
+  for (const std::string& problem : problems) py::print("warning: " + problem, py::arg("file") = stderr_file);
+  return text;
 }
 
 /// A batch of a sweep's runs (index, hash, case TOML), each solved unless it has a result; the
@@ -148,6 +205,7 @@ std::string sweep_manifest(const std::string& file) {
 std::vector<std::string> run_sweep_batch(const std::string& out, const std::vector<std::string>& keep,
                                          const std::vector<std::tuple<int, std::string, std::string>>& runs) {
   py::gil_scoped_release unlocked;
+  const WorkInProgress working;
   const SweepResults results(out);
   std::vector<std::string> statuses;
   for (const auto& [index, hash, case_toml] : runs) {
@@ -164,6 +222,16 @@ std::vector<std::string> run_sweep_batch(const std::string& out, const std::vect
   return statuses;
 }
 
+/// Result.write(): `dir` made a run's folder as a run makes it (run_folder.hpp): locked (InputError
+/// when another run holds DIR/.indentsim.lock), checked, and an earlier run's files removed; then
+/// `write` (Python's copy of the run's files) is called while the lock is held.  The GIL is held
+/// throughout: the folder work is short, and `write` is Python.
+void write_run_folder(const std::string& dir, const std::string& source, const py::function& write) {
+  RunFolder folder(dir, source);
+  folder.clear_earlier_run();
+  write();
+}
+
 /// The table of a sweep's results: {runs, finished, not_converged, failed, pending}.
 py::dict collect_sweep(const std::string& manifest_file) {
   SweepTally t;
@@ -175,6 +243,14 @@ py::dict collect_sweep(const std::string& manifest_file) {
     text << in.rdbuf();
     const SweepManifest manifest = SweepManifest::from_json(text.str(), manifest_file);
     t = SweepResults(manifest.definition.out).collect(manifest);
+  }
+  // A result.json that is no result (damaged, another run's, its files not as recorded): its row
+  // is pending, and the file and what is wrong are said on stderr, as the CLI says them.
+  if (!t.problems.empty()) {
+    const py::object stderr_file = py::module_::import("sys").attr("stderr");
+    for (const std::string& problem : t.problems)
+      py::print(fmt::format("warning: {}; its row is pending (a sweep does the run again)", problem),
+                py::arg("file") = stderr_file);
   }
   py::dict d;
   d["runs"] = t.runs;
@@ -202,6 +278,11 @@ PYBIND11_MODULE(_indentsim, m) {
       io_error(e.what());
     } catch (const SolverError& e) {
       solver_error(e.what());
+    } catch (const Interrupted& e) {
+      // Stopped before there was anything to return (a run in its pilot, a fit, a sweep batch).
+      const std::string message =
+          fmt::format("stopped by signal {} (Ctrl-C, or indentsim.request_stop())", e.signal());
+      PyErr_SetString(PyExc_KeyboardInterrupt, message.c_str());
     }
   });
 
@@ -263,4 +344,6 @@ PYBIND11_MODULE(_indentsim, m) {
   m.def("sweep_manifest", &sweep_manifest, py::arg("file"));
   m.def("run_sweep_batch", &run_sweep_batch, py::arg("out"), py::arg("keep"), py::arg("runs"));
   m.def("collect_sweep", &collect_sweep, py::arg("manifest_file"));
+  m.def("request_stop", &request_stop);
+  m.def("write_run_folder", &write_run_folder, py::arg("dir"), py::arg("source"), py::arg("write"));
 }
