@@ -129,13 +129,31 @@ TEST(LoadCase, MissingFileIsAnInputError) {
 }
 
 TEST(LoadCase, MeshTooLargeForMemoryIsRejectedBeforeAllocation) {
-  const LoadCase lc = parse_load_case(valid_case, "case.toml", {"mesh.contact_nodes=200000"});
+  const LoadCase lc =
+      parse_load_case(valid_case, "case.toml", {"mesh.contact_nodes=20000", "mesh.max_unknowns=2000000000"});
   try {
     plan_mesh(lc);
     FAIL() << "planned an enormous mesh";
   } catch (const InputError& e) {
     EXPECT_EQ(e.key(), "mesh.contact_nodes");
     EXPECT_NE(e.problem().find("GiB"), std::string::npos) << e.problem();
+  }
+}
+
+TEST(LoadCase, AMeshBeyondMaxUnknownsIsRefusedNamingTheKeyThatRaisesIt) {
+  const LoadCase lc = parse_load_case(valid_case, "case.toml", {"mesh.contact_nodes=1000"});
+  try {
+    plan_mesh(lc);
+    FAIL() << "planned a mesh beyond mesh.max_unknowns";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.key(), "mesh.contact_nodes");
+    EXPECT_NE(e.problem().find("mesh.max_unknowns = 2000000"), std::string::npos) << e.problem();
+  }
+  // Raised, the limit is no longer what refuses it (this machine's memory may still).
+  try {
+    plan_mesh(parse_load_case(valid_case, "case.toml", {"mesh.contact_nodes=1000", "mesh.max_unknowns=100000000"}));
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.problem().find("max_unknowns"), std::string::npos) << e.problem();
   }
 }
 

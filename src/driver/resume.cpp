@@ -12,15 +12,17 @@
 namespace indentsim {
 
 Checkpoint make_checkpoint(const Simulation& sim, const std::vector<IncrementRecord>& curve,
-                           const std::vector<double>& free_surface_depths) {
+                           const std::vector<double>& free_surface_depths,
+                           const std::vector<std::pair<int, TrueContact>>& true_contacts) {
   Checkpoint c;
-  c.load_case_toml = to_toml(sim.load_case());
+  c.load_case_toml = to_toml(case_as_run(sim.load_case(), sim.configuration()));
   c.planned_contact_half_width = sim.plan().contact_half_width_estimate;
   c.mesh_x = sim.mesh().x();
   c.mesh_y = sim.mesh().y();
   c.state = sim.state();
   c.curve = curve;
   c.free_surface_depths = free_surface_depths;
+  c.true_contacts = true_contacts;
   return c;
 }
 

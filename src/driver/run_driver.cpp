@@ -130,7 +130,7 @@ RunReport drive(Simulation& sim, RunOutput& output, RunObserver& observer, NewRu
   int last_checkpoint = output.records().empty() ? -1 : output.records().back().step;
   const auto checkpoint = [&] {
     last_checkpoint = output.records().back().step;
-    return save_checkpoint(checkpoint_dir, make_checkpoint(sim, output.records(), output.free_surface_depths()),
+    return save_checkpoint(checkpoint_dir, make_checkpoint(sim, output.records(), output.free_surface_depths(), output.true_contacts()),
                            schedule);
   };
   // The estimate of companions still running (start_run): taken as soon as it is there, and
@@ -241,7 +241,10 @@ RunReport run_load_case(LoadCase lc, RunObserver& observer) {
     Simulation& sim = *run.simulation;
     const auto& estimate = run.estimate;
     folder.clear_earlier_run();
-    RunOutput output = run.companions.valid() ? RunOutput(folder.dir(), lc, true) : RunOutput(folder.dir(), lc, estimate.get());
+    // case.toml holds the case as run: what the pilot measured and what "auto" chose.
+    const LoadCase as_run = case_as_run(lc, sim.configuration());
+    RunOutput output = run.companions.valid() ? RunOutput(folder.dir(), as_run, true)
+                                              : RunOutput(folder.dir(), as_run, estimate.get());
     output.set_configuration(run.simulation->configuration());
     if (target) output.set_target_choice(*target);
     RunReport report = drive(sim, output, observer, &run);
@@ -262,13 +265,21 @@ RunReport resume_run(const std::string& argument, const std::vector<std::string>
   const auto start = std::chrono::steady_clock::now();
   const fs::path file = choose_checkpoint(argument);
   const Checkpoint checkpoint = read_checkpoint(file);
+  // The run folder the checkpoint sits in (RUN/checkpoints/checkpoint_N.ck), wherever it has been
+  // moved or copied: it, not the folder the case was first run in, is where the run continues.
+  std::error_code ec;
+  fs::path home;
+  if (file.parent_path().filename() == "checkpoints") {
+    const fs::path run_dir = file.parent_path().parent_path().empty() ? fs::path(".") : file.parent_path().parent_path();
+    if (fs::is_regular_file(run_dir / "case.toml", ec)) home = run_dir;
+  }
   std::vector<std::string> all = overrides;
-  if (!out.empty()) all.push_back("output.dir=" + toml_string(out));
+  const std::string target = !out.empty() ? out : home.string();
+  if (!target.empty()) all.push_back("output.dir=" + toml_string(target));
   ResumedRun run = resume_from(checkpoint, file.string(), all);  // everything checked before writing
   const LoadCase stored = parse_load_case(checkpoint.load_case_toml, file.string());
   const fs::path dir = run.load_case.output.dir;
-  std::error_code ec;
-  const bool in_place = fs::equivalent(dir, stored.output.dir, ec);
+  const bool in_place = fs::equivalent(dir, home.empty() ? fs::path(stored.output.dir) : home, ec);
   if (in_place) {
     // Continuing in the run's own folder is for a plain continuation only: a branch (another load
     // path) must never overwrite the run it branches from.
@@ -279,7 +290,7 @@ RunReport resume_run(const std::string& argument, const std::vector<std::string>
                                    dir.string()));
     if (fs::is_regular_file(dir / "case.toml", ec)) {
       const LoadCase folder_case = read_load_case(dir / "case.toml");
-      if (!same_run(folder_case, run.load_case))
+      if (!same_run(folder_case, case_as_run(run.load_case, run.simulation->configuration())))
         throw InputError(file.string(), "--out",
                          fmt::format("\"{}\" now holds another run; give the continuation its own folder with --out",
                                      dir.string()));
@@ -292,8 +303,10 @@ RunReport resume_run(const std::string& argument, const std::vector<std::string>
   // The companions are run again (they are cheap and not checkpointed), before anything is written.
   const auto estimate = estimate_error(*run.simulation, observer);
   folder.clear_earlier_run(in_place ? std::optional<int>(step) : std::nullopt);
-  RunOutput output(folder.dir(), run.load_case, estimate.get(), checkpoint.curve, checkpoint.free_surface_depths);
+  const LoadCase as_run = case_as_run(run.load_case, run.simulation->configuration());
+  RunOutput output(folder.dir(), as_run, estimate.get(), checkpoint.curve, checkpoint.free_surface_depths);
   output.set_configuration(run.simulation->configuration());
+  output.restore_true_contacts(checkpoint.true_contacts);
   output.resumed(run.simulation->snapshot(checkpoint.curve.back()));
   RunReport report = drive(*run.simulation, output, observer);
   report.wall_seconds = seconds_since(start);

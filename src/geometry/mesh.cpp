@@ -121,6 +121,13 @@ double MeshPlan::estimated_bytes() const {
          n * 8.0 * 12.0;
 }
 
+/// A refusal of the mesh with the values that most likely caused it: a key given outside the
+/// magnitudes of its kind (a cone of half-angle 1e-300, a depth in nm written as m).
+static std::string with_implausible_values(const LoadCase& lc, std::string message) {
+  for (const auto& w : implausible_values(lc)) message += "; note: " + w;
+  return message;
+}
+
 MeshPlan plan_mesh(const LoadCase& lc, std::optional<double> measured_half_width) {
   const auto& m = lc.mesh;
   MeshPlan plan;
@@ -146,6 +153,33 @@ MeshPlan plan_mesh(const LoadCase& lc, std::optional<double> measured_half_width
     throw InputError(lc.source, size_key,
                      fmt::format("asks for a fine spacing of {:.3g} m: more than 1e8 elements along an edge",
                                  plan.fine_spacing));
+  // What double precision resolves: the uniform zone holds at least one element (an override
+  // below the spacing, or a specimen narrower than it, leaves none), and the specimen is at most
+  // 1e9 fine spacings across -- beyond, the far field's coordinates swallow the contact's and the
+  // stiffness cannot be factored (or, worse, factors into P = 0).
+  const auto zone_key = [&](const char* override_key, const std::optional<double>& given, const char* size_key_name,
+                            double size) -> std::string {
+    return given && *given <= size ? override_key : size_key_name;
+  };
+  if (!(plan.fine_width >= plan.fine_spacing))
+    throw InputError(lc.source, zone_key("mesh.fine_width", m.fine_width, "geometry.lx", lc.geometry.lx),
+                     fmt::format("the uniform zone ({:.3g} m wide) is narrower than one fine element ({:.3g} m = a* / "
+                                 "contact_nodes, a* = {:.3g} m): it must hold the contact",
+                                 plan.fine_width, plan.fine_spacing, a_star));
+  if (!(plan.fine_depth >= plan.fine_spacing))
+    throw InputError(lc.source, zone_key("mesh.fine_depth", m.fine_depth, "geometry.ly", lc.geometry.ly),
+                     fmt::format("the uniform zone ({:.3g} m deep) is shallower than one fine element ({:.3g} m = a* / "
+                                 "contact_nodes, a* = {:.3g} m): it must hold the contact",
+                                 plan.fine_depth, plan.fine_spacing, a_star));
+  constexpr double max_spacings_across = 1e9;
+  for (const auto& [key, size] : {std::pair<const char*, double>{"geometry.lx", lc.geometry.lx}, {"geometry.ly", lc.geometry.ly}})
+    if (!(size / plan.fine_spacing <= max_spacings_across))
+      throw InputError(lc.source, key,
+                       with_implausible_values(
+                           lc, fmt::format("{} m is {:.3g} fine elements ({:.3g} m) across: beyond {:g}, double "
+                                           "precision cannot resolve the contact against the specimen (is it in "
+                                           "metres? else use a smaller specimen or a larger mesh.contact_half_width)",
+                                           size, size / plan.fine_spacing, plan.fine_spacing, max_spacings_across)));
   try {
     plan.nodes_x = graded_axis_count(lc.geometry.lx, plan.fine_width, plan.fine_spacing, plan.growth);
     plan.nodes_y = graded_axis_count(lc.geometry.ly, plan.fine_depth, plan.fine_spacing, plan.growth);
@@ -153,6 +187,13 @@ MeshPlan plan_mesh(const LoadCase& lc, std::optional<double> measured_half_width
     throw InputError(lc.source, size_key, "gives a mesh with too many elements");
   }
 
+  if (plan.unknowns() > lc.mesh.max_unknowns)
+    throw InputError(lc.source, size_key,
+                     with_implausible_values(
+                         lc, fmt::format("the mesh would have {} x {} nodes ({} unknowns), more than "
+                                         "mesh.max_unknowns = {}: lower contact_nodes, check the lengths and the "
+                                         "angle, or raise mesh.max_unknowns",
+                                         plan.nodes_x, plan.nodes_y, plan.unknowns(), lc.mesh.max_unknowns)));
   const double pages = static_cast<double>(sysconf(_SC_PHYS_PAGES));
   const double page_size = static_cast<double>(sysconf(_SC_PAGE_SIZE));
   const double memory = pages > 0 && page_size > 0 ? pages * page_size : 8.0 * (1ull << 30);

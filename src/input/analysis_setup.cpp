@@ -4,6 +4,7 @@
 #include <toml++/toml.h>
 
 #include "indentsim/base/error.hpp"
+#include "indentsim/input/curve_csv.hpp"
 #include "key_declarations.hpp"
 
 namespace indentsim {
@@ -41,6 +42,13 @@ AnalysisSetup read_analysis_setup(const std::optional<std::filesystem::path>& fi
   for (const auto& key : keys)
     if (key.read) key.read(r, lc);
   for (const auto& [name, target] : curve_keys) r.read_string("curve", name, *target);
+  // A unit given here is this file's (or --set's) mistake, not the data file's.
+  if (!setup.columns.depth_unit.empty() && depth_unit_factor(setup.columns.depth_unit) == 0.0)
+    r.fail("curve.depth_unit", fmt::format("\"{}\" is not a depth unit (accepted: nm, um, mm, m)",
+                                           printable(setup.columns.depth_unit, 20)));
+  if (!setup.columns.force_unit.empty() && force_unit_factor(setup.columns.force_unit) == 0.0)
+    r.fail("curve.force_unit", fmt::format("\"{}\" is not a force unit (accepted: mN, uN, nN, N)",
+                                           printable(setup.columns.force_unit, 20)));
   if (!r.find("punch", "shape"))
     r.fail("punch.shape", "missing key: the indenter's shape (sphere, cone, flat or profile) gives the area function "
                           "A(h_c) (--indenter FILE, or --set punch.shape=...)");

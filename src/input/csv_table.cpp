@@ -1,5 +1,6 @@
 #include "indentsim/input/csv_table.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -38,7 +39,36 @@ struct Rows {
   static void end_of_row(int, void* self) { static_cast<Rows*>(self)->rows.emplace_back(); }
 };
 
+/// True when `line` split at `delimiter` gives two or more fields that are all numbers.
+bool numeric_row(const std::string& line, char delimiter) {
+  std::size_t fields = 0, start = 0;
+  for (;;) {
+    const std::size_t end = line.find(delimiter, start);
+    const std::string field = line.substr(start, end == std::string::npos ? std::string::npos : end - start);
+    double v = 0.0;
+    if (!parse_csv_number(field, v)) return false;
+    ++fields;
+    if (end == std::string::npos) break;
+    start = end + 1;
+  }
+  return fields >= 2;
+}
+
+/// The delimiter of the data, not of a title: an instrument's export begins with comments and
+/// metadata lines ("Number of Points = 42", "# ...") that hold no delimiter or another one, so
+/// the delimiter is the one that splits the most of the first lines into numbers only; a file
+/// without rows of numbers keeps the first line's (its messages then name the header).
 char detect_delimiter(const std::string& bytes) {
+  const char candidates[] = {',', '\t', ';'};
+  std::size_t numeric[3] = {0, 0, 0};
+  std::istringstream lines(bytes);
+  std::string line;
+  for (int n = 0; n < 400 && std::getline(lines, line); ++n) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    for (std::size_t c = 0; c < 3; ++c) numeric[c] += numeric_row(line, candidates[c]) ? 1 : 0;
+  }
+  const std::size_t best = static_cast<std::size_t>(std::max_element(numeric, numeric + 3) - numeric);
+  if (numeric[best] > 0) return candidates[best];
   const std::string first_line = bytes.substr(0, bytes.find_first_of("\r\n"));
   if (first_line.find(',') != std::string::npos) return ',';
   if (first_line.find('\t') != std::string::npos) return '\t';

@@ -32,6 +32,13 @@ std::pair<std::string, std::string> name_and_unit(const std::string& field) {
   return {f, ""};
 }
 
+/// A blank line, or a comment: instruments' exports start lines of notes with '#'.
+bool blank_or_comment(const std::vector<std::string>& row) {
+  if (row.empty()) return true;
+  const std::string first = trim(row[0]);
+  return (row.size() == 1 && first.empty()) || (!first.empty() && first[0] == '#');
+}
+
 bool all_numbers(const std::vector<std::string>& row) {
   double v = 0.0;
   return !row.empty() && std::all_of(row.begin(), row.end(), [&](const std::string& f) { return parse_csv_number(f, v); });
@@ -59,6 +66,14 @@ double force_unit_factor(const std::string& unit) {
   if (unit == "uN" || unit == "µN" || unit == "μN") return 1e-6;
   if (unit == "nN") return 1e-9;
   return 0.0;
+}
+
+bool is_per_length_force_unit(const std::string& unit) {
+  return unit.size() > 2 && unit.compare(unit.size() - 2, 2, "/m") == 0 && force_unit_factor(unit.substr(0, unit.size() - 2)) != 0.0;
+}
+
+double force_or_per_length_unit_factor(const std::string& unit) {
+  return is_per_length_force_unit(unit) ? force_unit_factor(unit.substr(0, unit.size() - 2)) : force_unit_factor(unit);
 }
 
 LoadDepthCurve read_curve_csv(const std::filesystem::path& file, const CurveColumns& columns) {
@@ -102,7 +117,9 @@ LoadDepthCurve read_curve_csv(const std::filesystem::path& file, const CurveColu
     std::size_t first_numbers = 0;
     while (first_numbers < rows.size() && !all_numbers(rows[first_numbers])) ++first_numbers;
     if (first_numbers == rows.size()) fail("curve", "holds no row of numbers");
-    if (first_numbers > 0) header_row = first_numbers - 1;
+    // The header is the last line before the numbers that is neither blank nor a comment.
+    for (std::size_t k = first_numbers; k > 0 && !header_row; --k)
+      if (!blank_or_comment(rows[k - 1])) header_row = k - 1;
     if (rows[first_numbers].size() != 2)
       fail("curve.depth_column",
            fmt::format("has {} columns: name the depth and the force column (curve.depth_column and "
@@ -111,13 +128,23 @@ LoadDepthCurve read_curve_csv(const std::filesystem::path& file, const CurveColu
                        header_row ? fmt::format("; the header holds {}", join_fields(rows[*header_row])) : ""));
   }
 
+  if (header_row)
+    for (const auto& field : rows[*header_row])
+      if (std::any_of(field.begin(), field.end(), [](char c) { return static_cast<unsigned char>(c) < 0x20 && c != '\t'; }))
+        fail(fmt::format("row {}", *header_row + 1),
+             fmt::format("the header field \"{}\" holds a control character (NUL or another byte below 0x20): is this "
+                         "a text file?",
+                         printable(trim(field), 40)));
+
   // The units: given, or from the header.
   LoadDepthCurve curve;
+  bool declared = false;  // the last unit_of's unit was given or in the header
   const auto unit_of = [&](const std::string& given, std::size_t column, const char* key, const char* what,
                            double (*factor)(const std::string&), const char* accepted, const std::string& fallback) {
     std::string unit = trim(given);
     if (unit.empty() && header_row && column < rows[*header_row].size())
       unit = name_and_unit(rows[*header_row][column]).second;
+    declared = !unit.empty();
     if (unit.empty()) unit = fallback;
     if (unit.empty())
       fail(key, fmt::format("the {} unit is missing: give {} ({}) or write it in the header, e.g. \"{} ({})\"",
@@ -128,16 +155,22 @@ LoadDepthCurve read_curve_csv(const std::filesystem::path& file, const CurveColu
   };
   curve.depth_unit = unit_of(columns.depth_unit, depth_col, "curve.depth_unit", "depth", depth_unit_factor,
                              "nm, um, mm, m", columns.default_depth_unit);
-  curve.force_unit = unit_of(columns.force_unit, force_col, "curve.force_unit", "force", force_unit_factor,
-                             "mN, uN, nN, N", columns.default_force_unit);
-  const double depth_scale = depth_unit_factor(curve.depth_unit), force_scale = force_unit_factor(curve.force_unit);
+  curve.force_unit = columns.force_per_length
+                         ? unit_of(columns.force_unit, force_col, "curve.force_unit", "force",
+                                   force_or_per_length_unit_factor, "mN, uN, nN, N, or per length N/m, mN/m, uN/m, nN/m",
+                                   columns.default_force_unit)
+                         : unit_of(columns.force_unit, force_col, "curve.force_unit", "force", force_unit_factor,
+                                   "mN, uN, nN, N", columns.default_force_unit);
+  curve.force_unit_declared = declared;
+  const double depth_scale = depth_unit_factor(curve.depth_unit),
+               force_scale = force_or_per_length_unit_factor(curve.force_unit);
 
   // The numbers: every row after the header, both columns finite numbers.
   const std::string depth_name = header_row ? printable(trim(rows[*header_row][depth_col]), 40) : "1";
   const std::string force_name = header_row ? printable(trim(rows[*header_row][force_col]), 40) : "2";
   for (std::size_t k = header_row ? *header_row + 1 : 0; k < rows.size(); ++k) {
     const auto& row = rows[k];
-    if (row.size() == 1 && trim(row[0]).empty()) continue;
+    if (blank_or_comment(row)) continue;
     double h = 0.0, P = 0.0;
     for (const auto& [col, column_name, value] :
          {std::tuple{depth_col, depth_name, &h}, std::tuple{force_col, force_name, &P}}) {

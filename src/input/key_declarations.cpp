@@ -133,6 +133,26 @@ KeyDeclaration choice_key(KeyDeclaration k, const Choice<E> (&names)[N], Access 
   return k;
 }
 
+/// Declares the magnitudes plausible for a key whose values `access` gives (a number, an
+/// optional one or an array: only what the case gives is judged).
+template <class Access>
+KeyDeclaration plausible(KeyDeclaration k, double low, double high, const char* of_what, Access access) {
+  k.plausible = KeyDeclaration::Plausible{low, high, of_what};
+  k.magnitudes = [=](const LoadCase& lc) -> std::vector<double> {
+    const auto& value = access(lc);
+    using V = std::decay_t<decltype(value)>;
+    if constexpr (std::is_same_v<V, std::optional<double>>) {
+      if (!value) return {};
+      return {*value};
+    } else if constexpr (std::is_same_v<V, std::vector<double>>) {
+      return value;
+    } else {
+      return {static_cast<double>(value)};
+    }
+  };
+  return k;
+}
+
 const std::vector<KeyDeclaration>& key_declarations() {
   static const std::vector<KeyDeclaration> keys = [] {
     std::vector<KeyDeclaration> k;
@@ -140,14 +160,20 @@ const std::vector<KeyDeclaration>& key_declarations() {
                             "plane_strain (a long punch on a block, P per unit thickness in N/m), axisymmetric (a "
                             "punch of revolution on a cylindrical specimen, P in N)"},
                            scene_names, [](auto& c) -> auto& { return c.geometry.kind; }));
-    k.push_back(number_key({"geometry", "lx", "number", "> 0", "m",
-                            "half width of the block (plane strain: the model is the half x >= 0 of a symmetric block); "
-                            "the specimen's radius in axisymmetry (its outer side free)",
-                            true},
-                           [](auto& c) -> auto& { return c.geometry.lx; }));
-    k.push_back(number_key({"geometry", "ly", "number", "> 0, > the deepest depth", "m",
-                            "depth of the block, height of the specimen (its base is clamped)", true},
-                           [](auto& c) -> auto& { return c.geometry.ly; }));
+    {
+      const auto lx = [](auto& c) -> auto& { return c.geometry.lx; };
+      const auto ly = [](auto& c) -> auto& { return c.geometry.ly; };
+      k.push_back(plausible(number_key({"geometry", "lx", "number", "> 0", "m",
+                                        "half width of the block (plane strain: the model is the half x >= 0 of a "
+                                        "symmetric block); the specimen's radius in axisymmetry (its outer side free)",
+                                        true},
+                                       lx),
+                            1e-8, 10.0, "the sizes of specimens", lx));
+      k.push_back(plausible(number_key({"geometry", "ly", "number", "> 0, > the deepest depth", "m",
+                                        "depth of the block, height of the specimen (its base is clamped)", true},
+                                       ly),
+                            1e-8, 10.0, "the sizes of specimens", ly));
+    }
     k.push_back(choice_key({"punch", "shape", "choice", "", "",
                             "sphere (circular profile of radius R: a sphere in axisymmetry, a cylinder in plane "
                             "strain; \"cylinder\" is a synonym), cone (a wedge in plane strain), flat (flat-ended), "
@@ -156,6 +182,12 @@ const std::vector<KeyDeclaration>& key_declarations() {
     {
       KeyDeclaration radius{"punch", "radius", "number", "> 0, > the deepest depth (sphere)", "m",
                             "sphere and flat: the punch radius R (required for them, refused for other shapes)"};
+      radius.default_words = "none: required for sphere and flat";
+      radius.plausible = KeyDeclaration::Plausible{1e-9, 1.0, "the radii of indenters"};
+      radius.magnitudes = [](const LoadCase& lc) -> std::vector<double> {
+        if (lc.punch.shape != PunchShapeKind::sphere && lc.punch.shape != PunchShapeKind::flat) return {};
+        return {lc.punch.radius};
+      };
       radius.read = [](const Reader& r, LoadCase& lc) { r.read_number("punch", "radius", lc.punch.radius); };
       radius.write = [](const LoadCase& lc) -> std::optional<std::string> {
         if (lc.punch.shape != PunchShapeKind::sphere && lc.punch.shape != PunchShapeKind::flat) return std::nullopt;
@@ -167,6 +199,13 @@ const std::vector<KeyDeclaration>& key_declarations() {
       KeyDeclaration angle{"punch", "half_angle", "number", "(0, 90)", "degrees",
                            "cone: angle between axis and face (70.3: Berkovich- and Vickers-equivalent; required for "
                            "the cone)"};
+      angle.default_words = "none: required for the cone";
+      // Cube-corner-equivalent 42.3, Berkovich- and Vickers-equivalent 70.3; conical tips 30 to 75.
+      angle.plausible = KeyDeclaration::Plausible{15.0, 85.0, "the half-angles of indenters"};
+      angle.magnitudes = [](const LoadCase& lc) -> std::vector<double> {
+        if (lc.punch.shape != PunchShapeKind::cone) return {};
+        return {lc.punch.half_angle};
+      };
       angle.read = [](const Reader& r, LoadCase& lc) { r.read_number("punch", "half_angle", lc.punch.half_angle); };
       angle.write = [](const LoadCase& lc) -> std::optional<std::string> {
         if (lc.punch.shape != PunchShapeKind::cone) return std::nullopt;
@@ -177,6 +216,11 @@ const std::vector<KeyDeclaration>& key_declarations() {
     {
       KeyDeclaration tip{"punch", "tip_radius", "number", ">= 0, cap within the specimen", "m",
                          "cone: radius of the spherical cap tangent to the face (a blunt tip; 0 = sharp)"};
+      tip.plausible = KeyDeclaration::Plausible{1e-9, 1e-2, "the tip radii of indenters"};
+      tip.magnitudes = [](const LoadCase& lc) -> std::vector<double> {
+        if (lc.punch.shape != PunchShapeKind::cone || lc.punch.tip_radius == 0.0) return {};
+        return {lc.punch.tip_radius};
+      };
       tip.read = [](const Reader& r, LoadCase& lc) { r.read_number("punch", "tip_radius", lc.punch.tip_radius); };
       tip.write = [](const LoadCase& lc) -> std::optional<std::string> {
         if (lc.punch.shape != PunchShapeKind::cone) return std::nullopt;
@@ -196,11 +240,18 @@ const std::vector<KeyDeclaration>& key_declarations() {
         return text.str() + " read into profile_points";
       };
       file.derived = true;  // case.toml holds the points themselves: a resumed run needs no file
+      file.default_words = "none: profile needs it or profile_points";
       k.push_back(file);
     }
     {
       KeyDeclaration points{"punch", "profile_points", "array of [r, g] pairs", "as punch.profile", "m",
                             "profile: the tip's points inline, instead of punch.profile (case.toml writes them so)"};
+      points.default_words = "none";
+      points.plausible = KeyDeclaration::Plausible{1e-9, 1.0, "the sizes of indenter tips (the last point's r)"};
+      points.magnitudes = [](const LoadCase& lc) -> std::vector<double> {
+        if (lc.punch.shape != PunchShapeKind::profile || lc.punch.profile.empty()) return {};
+        return {lc.punch.profile.back().first};
+      };
       points.read = [](const Reader& r, LoadCase& lc) { r.read_points("punch", "profile_points", lc.punch.profile); };
       points.write = [](const LoadCase& lc) -> std::optional<std::string> {
         if (lc.punch.shape != PunchShapeKind::profile) return std::nullopt;
@@ -215,18 +266,23 @@ const std::vector<KeyDeclaration>& key_declarations() {
     k.push_back(choice_key({"material", "model", "choice", "", "",
                             "elastic; ilyushin (deformation theory, the paper's); j2 (flow theory)", true},
                            model_names, [](auto& c) -> auto& { return c.material.model; }));
-    k.push_back(number_key({"material", "E", "number", "[1e-100, 1e100]", "Pa", "Young's modulus", true},
-                           [](auto& c) -> auto& { return c.material.E; },
-                           // Stresses and forces are E times O(1) numbers and their squares are formed
-                           // (norms, J2): beyond these bounds double precision cannot hold them.
-                           ": beyond what double precision can solve (the results scale with E: use SI units, "
-                           "pascals)"));
+    {
+      const auto E = [](auto& c) -> auto& { return c.material.E; };
+      k.push_back(plausible(number_key({"material", "E", "number", "[1e-100, 1e100]", "Pa", "Young's modulus", true}, E,
+                                       // Stresses and forces are E times O(1) numbers and their squares are
+                                       // formed (norms, J2): beyond these bounds double precision cannot hold them.
+                                       ": beyond what double precision can solve (the results scale with E: use SI "
+                                       "units, pascals)"),
+                            1e3, 2e12, "the moduli of solids (soft gels to diamond)", E));
+    }
     k.push_back(number_key({"material", "nu", "number", "(-1, 0.5)", "", "Poisson's ratio", true},
                            [](auto& c) -> auto& { return c.material.nu; }));
-    k.push_back(number_key({"material", "e0", "number", "(0, 1)", "",
+    k.push_back(number_key({"material", "e0", "number", "[1e-9, 1)", "",
                             "elastic limit of the strain intensity e_u; the uniaxial yield stress is sigma_y = 3 mu e0 "
                             "= E e0 3 / (2 (1 + nu)) (give e0 or yield_stress, not both)"},
-                           [](auto& c) -> auto& { return c.material.e0; }, ": a strain"));
+                           [](auto& c) -> auto& { return c.material.e0; },
+                           ": a strain (solids yield at 1e-5 to 1e-1; below 1e-9 the law's ratio e_u / e0 leaves "
+                           "double precision)"));
     {
       KeyDeclaration ys{"material", "yield_stress", "number", "> 0", "Pa",
                         "uniaxial yield stress sigma_y, instead of e0 (e0 = sigma_y / (3 mu))"};
@@ -235,6 +291,12 @@ const std::vector<KeyDeclaration>& key_declarations() {
         return toml_number(lc.material.yield_stress.value_or(yield_stress_of_e0(lc.material.e0, lc.material.E, lc.material.nu)));
       };
       ys.derived = true;
+      ys.default_words = "from e0";
+      ys.plausible = KeyDeclaration::Plausible{1e5, 3e10, "the yield stresses of solids"};
+      ys.magnitudes = [](const LoadCase& lc) -> std::vector<double> {
+        if (!lc.material.yield_stress) return {};
+        return {*lc.material.yield_stress};
+      };
       k.push_back(ys);
     }
     k.push_back(choice_key({"material", "hardening", "choice", "", "",
@@ -245,9 +307,19 @@ const std::vector<KeyDeclaration>& key_declarations() {
                            [](auto& c) -> auto& { return c.material.kappa; }));
     k.push_back(number_key({"material", "n", "number", "(0, 1)", "", "power law: sigma_u grows as e_u^n beyond e0"},
                            [](auto& c) -> auto& { return c.material.n; }));
-    k.push_back(numbers_key({"load", "path", "array of numbers", "from 0, each >= 0", "m",
-                             "depth waypoints alpha, piecewise linear; may go down (unload, separate) and up again", true},
-                            [](auto& c) -> auto& { return c.load.path; }));
+    {
+      const auto path = [](auto& c) -> auto& { return c.load.path; };
+      KeyDeclaration d = numbers_key({"load", "path", "array of numbers", "from 0, each >= 0", "m",
+                                      "depth waypoints h, piecewise linear; may go down (unload, separate) and up again",
+                                      true},
+                                     path);
+      d.plausible = KeyDeclaration::Plausible{1e-10, 0.1, "indentation depths (the deepest waypoint)"};
+      d.magnitudes = [](const LoadCase& lc) -> std::vector<double> {
+        if (lc.load.path.empty()) return {};
+        return {*std::max_element(lc.load.path.begin(), lc.load.path.end())};
+      };
+      k.push_back(d);
+    }
     {
       KeyDeclaration inc{"load", "increments", "integer or array of integers", "[1, 1e7] in all", "",
                          "increments along the whole path (spread by path length), or one count per segment", true};
@@ -269,16 +341,37 @@ const std::vector<KeyDeclaration>& key_declarations() {
                              "fine-zone elements across the estimated final contact half-width (raise it to buy "
                              "accuracy); 30 under a cone"},
                             [](auto& c) -> auto& { return c.mesh.contact_nodes; }));
-    k.push_back(optional_number_key({"mesh", "contact_half_width", "number", "> 0", "m",
+    k.push_back(plausible(optional_number_key({"mesh", "contact_half_width", "number", "> 0", "m",
                                      "override of the estimate a* that sizes the mesh (default: Hertz, or a pilot run)"},
-                                    [](auto& c) -> auto& { return c.mesh.contact_half_width; }));
-    k.push_back(optional_number_key({"mesh", "fine_width", "number", "> 0", "m", "override: width of the uniform zone (default 1.5 a*)"},
-                                    [](auto& c) -> auto& { return c.mesh.fine_width; }));
-    k.push_back(optional_number_key({"mesh", "fine_depth", "number", "> 0", "m", "override: depth of the uniform zone (default 1.5 a*)"},
-                                    [](auto& c) -> auto& { return c.mesh.fine_depth; }));
+                                    [](auto& c) -> auto& { return c.mesh.contact_half_width; }), 1e-10, 10.0, "the lengths of a mesh", [](auto& c) -> auto& { return c.mesh.contact_half_width; }));
+    k.push_back(plausible(optional_number_key({"mesh", "fine_width", "number", "> 0", "m", "override: width of the uniform zone (default 1.5 a*)"},
+                                    [](auto& c) -> auto& { return c.mesh.fine_width; }), 1e-10, 10.0, "the lengths of a mesh", [](auto& c) -> auto& { return c.mesh.fine_width; }));
+    k.push_back(plausible(optional_number_key({"mesh", "fine_depth", "number", "> 0", "m", "override: depth of the uniform zone (default 1.5 a*)"},
+                                    [](auto& c) -> auto& { return c.mesh.fine_depth; }), 1e-10, 10.0, "the lengths of a mesh", [](auto& c) -> auto& { return c.mesh.fine_depth; }));
     k.push_back(optional_number_key({"mesh", "growth", "number", "[1, 2]", "",
                                      "override: growth ratio of the far field (default 1 + 2.5 / contact_nodes)"},
                                     [](auto& c) -> auto& { return c.mesh.growth; }));
+    {
+      KeyDeclaration zone{"mesh", "plastic_zone", "array of [h, width, depth] triples", "depths increasing, >= 0", "m",
+                          "written by case.toml: the pilot run's plastic zone as it grew with the depth h (sizes the "
+                          "condensed near field); with contact_half_width, the run needs no pilot"};
+      zone.default_words = "none: measured by the pilot";
+      zone.read = [](const Reader& r, LoadCase& lc) { r.read_triples("mesh", "plastic_zone", lc.mesh.plastic_zone); };
+      zone.write = [](const LoadCase& lc) -> std::optional<std::string> {
+        if (lc.mesh.plastic_zone.empty()) return std::nullopt;
+        std::string text = "[";
+        for (std::size_t i = 0; i < lc.mesh.plastic_zone.size(); ++i) {
+          const auto& z = lc.mesh.plastic_zone[i];
+          text += fmt::format("{}[{}, {}, {}]", i ? ", " : "", toml_number(z[0]), toml_number(z[1]), toml_number(z[2]));
+        }
+        return text + "]";
+      };
+      k.push_back(zone);
+    }
+    k.push_back(integer_key({"mesh", "max_unknowns", "integer", "[1000, 2000000000]", "",
+                             "the largest mesh the case may plan, in unknowns (the planned mesh and its companion "
+                             "runs are refused beyond it, before any work; raise it for a mesh meant to be larger)"},
+                            [](auto& c) -> auto& { return c.mesh.max_unknowns; }));
     k.push_back(choice_key({"mesh", "error_estimate", "choice", "", "",
                             "richardson: a companion run at half the contact_nodes gives each increment's "
                             "discretization error of P and a (curve.csv, summary.json); observed: a second one at "
@@ -289,7 +382,10 @@ const std::vector<KeyDeclaration>& key_declarations() {
                                      "pilot, checks its estimate and refines once if it was missed"},
                                     [](auto& c) -> auto& { return c.mesh.target_error; }));
     {
-      KeyDeclaration dir{"output", "dir", "string", "not empty", "", "output folder (relative to the working directory)"};
+      KeyDeclaration dir{"output", "dir", "string", "not empty", "",
+                         "output folder (relative to the working directory); by default out/ and the case file's "
+                         "name without its extension, so that runs of different cases keep their own folders"};
+      dir.default_words = "out/<case name>";
       dir.read = [](const Reader& r, LoadCase& lc) { r.read_string("output", "dir", lc.output.dir); };
       dir.write = [](const LoadCase& lc) -> std::optional<std::string> {
         std::ostringstream text;
@@ -329,10 +425,10 @@ const std::vector<KeyDeclaration>& key_declarations() {
                             "E_r = sqrt(pi) / (2 beta) S / sqrt(A_c) (1 for a body of revolution, 1.034 for a "
                             "Berkovich pyramid)"},
                            [](auto& c) -> auto& { return c.analysis.beta; }));
-    k.push_back(optional_number_key({"analysis", "indenter_E", "number", "> 0", "Pa",
+    k.push_back(plausible(optional_number_key({"analysis", "indenter_E", "number", "> 0", "Pa",
                                      "the indenter's Young's modulus for the specimen modulus (default: rigid; "
                                      "diamond 1141e9)"},
-                                    [](auto& c) -> auto& { return c.analysis.indenter_E; }));
+                                    [](auto& c) -> auto& { return c.analysis.indenter_E; }), 1e3, 2e12, "the moduli of solids", [](auto& c) -> auto& { return c.analysis.indenter_E; }));
     k.push_back(number_key({"analysis", "indenter_nu", "number", "(-1, 0.5)", "", "the indenter's Poisson's ratio"},
                            [](auto& c) -> auto& { return c.analysis.indenter_nu; }));
     k.push_back(number_key({"solver", "tolerance", "number", "[1e-14, 1e-2)", "",
@@ -431,11 +527,48 @@ std::vector<KeyDescription> describe_keys() {
     d.help = key.help;
     d.required = key.required;
     if (key.required) d.default_value = "required";
-    else if (key.derived) d.default_value = "from e0";
+    else if (key.default_words) d.default_value = key.default_words;
     else d.default_value = key.write(defaults).value_or("(computed)");
+    d.default_is_value = !key.required && !key.default_words && key.write(defaults).has_value();
     out.push_back(d);
   }
   return out;
+}
+
+std::vector<std::string> implausible_values(const LoadCase& lc) {
+  std::vector<std::string> warnings;
+  for (const auto& key : key_declarations()) {
+    if (!key.plausible || !key.magnitudes) continue;
+    const auto& p = *key.plausible;
+    for (const double v : key.magnitudes(lc)) {
+      if (!(std::abs(v) < p.low || std::abs(v) > p.high)) continue;
+      const std::string unit = key.unit;
+      const std::string hint = unit == "m"         ? "metres are meant (2 um is 2e-6)"
+                               : unit == "Pa"      ? "pascals are meant (300 MPa is 300e6, 210 GPa is 210e9)"
+                               : unit == "degrees" ? "degrees between axis and face are meant (70.3 for the "
+                                                     "Berkovich-equivalent cone)"
+                                                   : "is the unit right?";
+      warnings.push_back(fmt::format("{}.{} = {:g} {} lies outside {} ({:g} to {:g} {}): {}", key.section, key.name, v,
+                                     unit, p.of_what, p.low, p.high, unit, hint));
+    }
+  }
+  return warnings;
+}
+
+std::optional<std::string> declared_interval_problem(const std::string& key, double value) {
+  for (const auto& k : key_declarations()) {
+    if (key != std::string(k.section) + "." + k.name) continue;
+    const auto bounds = bounds_of(k.range);
+    return bounds ? bounds->problem(value) : std::nullopt;
+  }
+  return std::nullopt;
+}
+
+std::optional<PlausibleMagnitudes> plausible_magnitudes(const std::string& key) {
+  for (const auto& k : key_declarations())
+    if (key == std::string(k.section) + "." + k.name && k.plausible)
+      return PlausibleMagnitudes{k.plausible->low, k.plausible->high, k.plausible->of_what};
+  return std::nullopt;
 }
 
 std::string first_physics_difference(const LoadCase& a, const LoadCase& b) {

@@ -4,6 +4,7 @@
 // writer and the key table (key_declarations.cpp) and the analysis setup (analysis_setup.cpp)
 // all come from this list.
 #include <algorithm>
+#include <array>
 #include <cstddef>
 #include <filesystem>
 #include <functional>
@@ -75,13 +76,25 @@ struct KeyDeclaration {
   const char* help;
   bool required = false;
   /// Reads the key from the TOML table (when present) into the load case.
-  std::function<void(const Reader&, LoadCase&)> read;
+  std::function<void(const Reader&, LoadCase&)> read{};
   /// The key's value as TOML text, or nothing when it is absent (an optional override unset).
-  std::function<std::optional<std::string>(const LoadCase&)> write;
+  std::function<std::optional<std::string>(const LoadCase&)> write{};
   /// Shown as a comment in case.toml, not as a key (a value derived from another key).
   bool derived = false;
   /// Throws InputError naming the key when its value lies outside the declared interval.
-  std::function<void(const LoadCase&)> check;
+  std::function<void(const LoadCase&)> check{};
+  /// What `indentsim keys` shows as the default when the default value is not a value of the
+  /// key (a required-by-shape key, a derived one, a default computed from the case).
+  const char* default_words = nullptr;
+  /// The magnitudes a solid, an indenter or an instrument has for this key (in the key's unit):
+  /// a value given outside them runs, but is most likely a unit slip, and is warned about.
+  struct Plausible {
+    double low = 0.0, high = 0.0;
+    const char* of_what = "";  ///< "the moduli of solids"
+  };
+  std::optional<Plausible> plausible{};
+  /// The values of the key the case uses (none when the key does not apply or is not given).
+  std::function<std::vector<double>(const LoadCase&)> magnitudes{};
 };
 
 /// The accepted interval at the head of a key's range words (nullopt: none there).
@@ -294,6 +307,28 @@ public:
         else fail(where, fmt::format("element {} holds {}, expected numbers", i, type_name(item)));
       }
       target.emplace_back(values[0], values[1]);
+    }
+  }
+
+  /// An array of [h, width, depth] triples (mesh.plastic_zone).
+  void read_triples(const std::string& section, const std::string& key, std::vector<std::array<double, 3>>& target) const {
+    const toml::node* node = find(section, key);
+    if (!node) return;
+    const toml::array* array = node->as_array();
+    const std::string where = section + "." + key;
+    if (!array) fail(where, fmt::format("expected an array of [h, width, depth] triples, got {}", type_name(*node)));
+    target.clear();
+    for (std::size_t i = 0; i < array->size(); ++i) {
+      const toml::array* triple = array->get(i)->as_array();
+      if (!triple || triple->size() != 3) fail(where, fmt::format("element {} is not a triple [h, width, depth]", i));
+      std::array<double, 3> values{};
+      for (std::size_t c = 0; c < 3; ++c) {
+        const toml::node& item = *triple->get(c);
+        if (auto v = item.value_exact<double>()) values[c] = *v;
+        else if (auto n = item.value_exact<int64_t>()) values[c] = static_cast<double>(*n);
+        else fail(where, fmt::format("element {} holds {}, expected numbers", i, type_name(item)));
+      }
+      target.push_back(values);
     }
   }
 

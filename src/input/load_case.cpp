@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 
@@ -56,6 +59,17 @@ void apply_override(toml::table& root, const std::string& text, const std::strin
     parsed = toml::parse("value = " + value_text);
   } catch (const toml::parse_error&) {
     is_toml_value = false;
+  }
+  // A number beyond double precision (1e400) is no TOML value either: without this it would be
+  // taken for a bare word and refused later as "a string".
+  if (!is_toml_value) {
+    char* end = nullptr;
+    errno = 0;
+    const double x = std::strtod(value_text.c_str(), &end);
+    if (end != value_text.c_str() && *end == '\0' && (errno == ERANGE || !std::isfinite(x)))
+      fail(path, fmt::format("{} is beyond double precision (numbers must lie within +-1.8e308, and away from "
+                             "zero beyond 2.2e-308)",
+                             printable(value_text, 60)));
   }
   if (!root.contains(section)) root.insert(section, toml::table{});
   toml::table* table = root[section].as_table();
@@ -138,6 +152,20 @@ LoadCase from_table(const toml::table& root, const std::string& source, const st
     if (!(*lc.material.yield_stress > 0.0))
       r.fail("material.yield_stress", fmt::format("must be > 0 (got {})", *lc.material.yield_stress));
     lc.material.e0 = e0_of_yield_stress(*lc.material.yield_stress, lc.material.E, lc.material.nu);
+    // The law works with e0 = sigma_y / (3 mu): a yield stress that gives no strain of a solid is
+    // the key the user wrote, usually a unit slip in it or in material.E.
+    const double e0 = lc.material.e0;
+    if (!(e0 >= min_elastic_limit_strain && e0 < 1.0))
+      r.fail("material.yield_stress",
+             fmt::format("sigma_y = {} Pa gives the elastic-limit strain e0 = sigma_y / (3 mu) = {:.3g} with "
+                         "material.E = {} Pa, but e0 must lie in [{:g}, 1): are both in pascals (300 MPa is 300e6)?",
+                         *lc.material.yield_stress, e0, lc.material.E, min_elastic_limit_strain));
+  }
+  // Without output.dir, out/ and the case's name: two cases run from one folder keep their own
+  // runs (a sweep names its folder the same way).
+  if (!r.find("output", "dir")) {
+    const std::filesystem::path file(source);
+    if (file.extension() == ".toml" && !file.stem().empty()) lc.output.dir = "out/" + file.stem().string();
   }
   check_punch_keys(r, lc);
   // A cone has no length scale: its contact edge sweeps the whole contact zone node by node, and

@@ -23,8 +23,13 @@ std::vector<std::pair<double, double>> read_profile_csv(const std::filesystem::p
     const bool numbers = row.size() == 2 && parse_csv_number(row[0], r) && parse_csv_number(row[1], g);
     if (!numbers) {
       if (points.empty() && line == 1) continue;  // a header row
-      fail(fmt::format("row {} is not two numbers r, g (got {} field{}: \"{}\")", line, row.size(),
-                       row.size() == 1 ? "" : "s", printable(row.empty() ? "" : row[0], 40)));
+      if (row.size() != 2)
+        fail(fmt::format("row {} is not two numbers r, g (got {} field{}: \"{}\")", line, row.size(),
+                         row.size() == 1 ? "" : "s", printable(row[0], 40)));
+      // Quote the field that is wrong, not its good neighbour.
+      const bool r_bad = !parse_csv_number(row[0], r);
+      fail(fmt::format("row {}: {} = \"{}\" is not a finite number", line, r_bad ? "r" : "g",
+                       printable(trim_csv_field(row[r_bad ? 0 : 1]), 40)));
     }
     points.emplace_back(r, g);
   }

@@ -35,6 +35,18 @@ void validate_profile(const LoadCase& lc, bool within_run) {
       fail(k, fmt::format("has g = {} after g = {}: the profile must not descend (not monotone)", g,
                           points[k - 1].second));
   }
+  // Double precision: a point closer to its neighbour than 1e-9 of the profile's reach, or a
+  // height a million times that reach, is beyond what the contact gap can resolve.
+  const double reach = points.back().first;
+  for (std::size_t k = 1; k < points.size(); ++k) {
+    if (points[k].first - points[k - 1].first < 1e-9 * reach)
+      fail(k, fmt::format("has r = {} m, {} m from the point before it: closer than 1e-9 of the profile's reach "
+                          "(r = {} m), which double precision cannot resolve",
+                          points[k].first, points[k].first - points[k - 1].first, reach));
+    if (points[k].second > 1e6 * reach)
+      fail(k, fmt::format("has g = {} m, over a million times the profile's reach (r = {} m): not a tip", points[k].second,
+                          reach));
+  }
   if (!within_run) return;
   if (!(points.back().second > lc.max_depth()))
     throw InputError(lc.source, key,
@@ -121,12 +133,29 @@ void validate(const LoadCase& lc) {
     fail("load.path", fmt::format("depth {} is not small against the block depth {}", lc.max_depth(),
                                   lc.geometry.ly));
   if (!lc.load.segment_increments.empty() && lc.load.segment_increments.size() + 1 != path.size())
-    fail("load.increments", fmt::format("has {} per-segment counts for a path of {} segments",
-                                        lc.load.segment_increments.size(), path.size() - 1));
+    fail("load.path", fmt::format("has {} segments, but load.increments gives {} per-segment counts: set the two "
+                                  "together (or load.increments as one total, spread by path length)",
+                                  path.size() - 1, lc.load.segment_increments.size()));
   if (lc.load.increments < 1) fail("load.increments", fmt::format("must be >= 1 (got {})", lc.load.increments));
   if (lc.load.increments > 10'000'000)
     fail("load.increments", fmt::format("{} is more than 1e7 increments", lc.load.increments));
 
+  if (lc.mesh.contact_half_width && !(*lc.mesh.contact_half_width < std::min(lc.geometry.lx, lc.geometry.ly)))
+    fail("mesh.contact_half_width",
+         fmt::format("{} m is not smaller than the specimen (geometry.lx = {} m, geometry.ly = {} m): a contact wider "
+                     "than the specimen is no indentation",
+                     *lc.mesh.contact_half_width, lc.geometry.lx, lc.geometry.ly));
+  if (!lc.mesh.plastic_zone.empty()) {
+    if (!lc.mesh.contact_half_width)
+      fail("mesh.plastic_zone", "is the pilot's and comes with its contact half-width: give mesh.contact_half_width too");
+    for (std::size_t i = 0; i < lc.mesh.plastic_zone.size(); ++i) {
+      const auto& z = lc.mesh.plastic_zone[i];
+      if (!(std::isfinite(z[0]) && std::isfinite(z[1]) && std::isfinite(z[2]) && z[0] >= 0.0 && z[1] >= 0.0 && z[2] >= 0.0))
+        fail("mesh.plastic_zone", fmt::format("element {} must be three finite lengths >= 0", i));
+      if (i > 0 && !(z[0] > lc.mesh.plastic_zone[i - 1][0]))
+        fail("mesh.plastic_zone", fmt::format("element {}: the depths h must increase", i));
+    }
+  }
   if (lc.mesh.contact_half_width && punch.shape == PunchShapeKind::flat)
     fail("mesh.contact_half_width", "a flat punch's contact radius is punch.radius: the mesh is sized from it");
   if (lc.mesh.target_error && lc.mesh.error_estimate == ErrorEstimateChoice::off)
@@ -134,6 +163,11 @@ void validate(const LoadCase& lc) {
 
   validate_analysis(lc);
   if (lc.output.dir.empty()) fail("output.dir", "must not be empty");
+  // A NUL would cut the path short at the system call ("a\u0000b" creates a); other control
+  // characters make folders no shell command can name.
+  if (std::any_of(lc.output.dir.begin(), lc.output.dir.end(), [](char c) { return static_cast<unsigned char>(c) < 0x20 || c == 0x7f; }))
+    fail("output.dir", fmt::format("\"{}\" holds a control character (NUL, a newline, ...): not a folder name",
+                                   printable(lc.output.dir, 80)));
   for (std::size_t i = 0; i < lc.output.profile_depths.size(); ++i) {
     const double d = lc.output.profile_depths[i];
     if (!(d >= 0.0 && d <= lc.geometry.ly))

@@ -169,7 +169,9 @@ struct StateReader {
   void operator()(const char*, std::vector<std::string>& v, const char* what) {  // the warnings
     const auto n = in.get<std::uint64_t>(what);
     if (n > in.left()) in.fail("claims more warnings than the file holds");
-    for (std::uint64_t k = 0; k < n; ++k) v.push_back(in.get_string("a warning"));
+    // A warning is printed again on resume and written to summary.json: made printable here (a
+    // hostile file's ESC or NUL never reaches a terminal) and bounded in length.
+    for (std::uint64_t k = 0; k < n; ++k) v.push_back(printable(in.get_string("a warning"), 2000));
   }
   void operator()(const char*, NearField& near, const char* what) {
     near.condensed = in.get<std::uint8_t>(what) != 0;
@@ -268,6 +270,13 @@ std::string serialize(const Checkpoint& c) {
   payload.put<std::uint64_t>(c.curve.size());
   for (const auto& r : c.curve) write_record(payload, r);
   payload.put_vector(c.free_surface_depths);
+  payload.put<std::uint64_t>(c.true_contacts.size());
+  for (const auto& [step, truth] : c.true_contacts) {
+    payload.put<std::int32_t>(step);
+    payload.put<std::uint8_t>(truth.stiffness ? 1 : 0);
+    payload.put(truth.stiffness.value_or(0.0));
+    payload.put(truth.half_width);
+  }
 
   ByteWriter file;
   file.bytes().append(magic, sizeof(magic));
@@ -312,6 +321,20 @@ Checkpoint deserialize(const std::string& bytes, const std::string& source) {
   if (rows > in.left()) in.fail("claims more curve rows than the file holds");
   for (std::uint64_t k = 0; k < rows; ++k) c.curve.push_back(read_record(in));
   c.free_surface_depths = in.get_vector<double>("the summary data");
+  const auto truths = in.get<std::uint64_t>("the true contacts");
+  if (truths > in.left()) in.fail("claims more true contacts than the file holds");
+  for (std::uint64_t k = 0; k < truths; ++k) {
+    const int step = in.get<std::int32_t>("a true contact");
+    const bool has_stiffness = in.get<std::uint8_t>("a true contact") != 0;
+    const double stiffness = in.get<double>("a true contact");
+    TrueContact t;
+    if (has_stiffness) t.stiffness = stiffness;
+    t.half_width = in.get<double>("a true contact");
+    if (!(step > 0 && static_cast<std::uint64_t>(step) < rows) || !std::isfinite(stiffness) || !(t.half_width >= 0.0) ||
+        !std::isfinite(t.half_width) || (has_stiffness && !(stiffness > 0.0)))
+      in.fail(fmt::format("its true contact {} is not at a row of its curve or not a finite positive number", k));
+    c.true_contacts.emplace_back(step, t);
+  }
   if (in.left() != 0) in.fail(fmt::format("has {} unexplained bytes at its end", in.left()));
   if (c.free_surface_depths.size() != c.curve.size() || s.rows != static_cast<int>(c.curve.size()) ||
       s.next_target != c.curve.size())

@@ -250,15 +250,24 @@ RunOutput::RunOutput(const std::filesystem::path& dir, const LoadCase& load_case
     records_.push_back(r);
     depths_.push_back(replay_depths[k]);
     last_step_ = r.step;
-    // Fields written before the interruption stay in the series.
+    // Fields written before the interruption stay in the series -- those the schedule writes (every
+    // fields_every increments, the deepest state); the frame a stop wrote of its last state is
+    // not one an uninterrupted run has, and goes.
+    const bool deepest = r.alpha == deepest_depth_ && peak_step_ < 0 && r.step > 0;
+    const bool scheduled = (fields_every_ > 0 && r.step % fields_every_ == 0) || deepest;
     const std::string vtu = fmt::format("fields/step_{:06d}.vtu", r.step);
     if (std::filesystem::exists(dir_ / vtu)) {
-      fields_.add_existing(r.step, vtu);
-      last_fields_step_ = r.step;
+      if (scheduled) {
+        fields_.add_existing(r.step, vtu);
+        last_fields_step_ = r.step;
+      } else {
+        std::error_code ec;
+        std::filesystem::remove(dir_ / vtu, ec);
+      }
     }
     // The deepest state passed before the checkpoint: its fields are on disk, its tables are not
     // (they are computed from a live state).
-    if (r.alpha == deepest_depth_ && peak_step_ < 0 && r.step > 0) peak_step_ = r.step;
+    if (deepest) peak_step_ = r.step;
   }
 }
 

@@ -21,7 +21,6 @@ namespace {
 // milliseconds and KLU, the user's default, is kept.
 constexpr int cholmod_crossover_unknowns = 1000;
 constexpr double max_relative_contact = 0.1;  // a / lx and a / ly beyond which the run warns
-constexpr double min_plausible_modulus = 1e3, max_plausible_modulus = 2e12;  // [Pa]
 
 // Plastic scenes spread their contact wider than the elastic Hertz estimate, up to the punch's
 // chord sqrt(2 R alpha) when the material flows freely.  A coarse pilot run of the same load
@@ -134,13 +133,22 @@ ElementKind choose_element(const LoadCase& lc) {
                                                                                        : ElementKind::q1;
 }
 
+/// The keys that set a contact's size, for a warning that it is too large: a sphere's and a flat
+/// punch's radius, a cone's depth, a profile's points.
+static std::string contact_size_question(const LoadCase& lc) {
+  switch (lc.punch.shape) {
+    case PunchShapeKind::sphere: return "are punch.radius and load.path in metres?";
+    case PunchShapeKind::flat: return "is punch.radius in metres?";
+    case PunchShapeKind::cone: return "is load.path in metres?";
+    case PunchShapeKind::profile: return "are the profile's points and load.path in metres?";
+  }
+  return "";
+}
+
 std::vector<std::string> plausibility_warnings(const LoadCase& lc, const MeshPlan& plan) {
-  std::vector<std::string> warnings;
-  // Unit slips: a modulus given in GPa or MPa instead of Pa runs, and gives forces 1e6-1e9 off.
-  if (lc.material.E < min_plausible_modulus || lc.material.E > max_plausible_modulus)
-    warnings.push_back(fmt::format("material.E = {:g} Pa is outside the moduli of solids ({:g} Pa to {:g} Pa): "
-                                   "pascals are meant (210 GPa is 210e9)",
-                                   lc.material.E, min_plausible_modulus, max_plausible_modulus));
+  // Unit slips: a modulus in GPa instead of Pa, a depth in nm written as m, run and give results
+  // 1e3 to 1e9 off; each value outside the magnitudes of its kind is named by its key.
+  std::vector<std::string> warnings = implausible_values(lc);
   // The model is small-strain with the gap measured vertically (docs/MODEL.md §3): both need slopes
   // and depths small against the punch's size.
   if (auto slope = make_punch(lc.punch)->slope_warning(lc.max_depth())) warnings.push_back(*slope);
@@ -151,8 +159,8 @@ std::vector<std::string> plausibility_warnings(const LoadCase& lc, const MeshPla
     if (a > max_relative_contact * size)
       warnings.push_back(fmt::format("the contact half-width (about {:.3g} m) is {:.2g} of {} = {:.3g} m: the "
                                      "specimen's edges change P far beyond the discretization error (keep a / {} "
-                                     "below {:g}; is punch.radius in metres?)",
-                                     a, a / size, key, size, key, max_relative_contact));
+                                     "below {:g}; {})",
+                                     a, a / size, key, size, key, max_relative_contact, contact_size_question(lc)));
   return warnings;
 }
 
@@ -160,6 +168,12 @@ RunPlan plan_run(const LoadCase& load_case, std::optional<double> planned_contac
   RunPlan plan{plan_mesh(load_case), {}};  // also refuses a mesh too large before any work
   if (planned_contact_half_width) {
     plan.mesh = plan_mesh(load_case, planned_contact_half_width);
+  } else if (!load_case.mesh.plastic_zone.empty()) {
+    // The pilot's measurements as case.toml recorded them: the same plan without the pilot.
+    for (const auto& z : load_case.mesh.plastic_zone) {
+      plan.plastic_zone.depths.push_back(z[0]);
+      plan.plastic_zone.extents.push_back(PlasticExtent{z[1], z[2]});
+    }
   } else if (load_case.material.model != MaterialModel::elastic && !load_case.mesh.contact_half_width) {
     const PilotResult pilot = pilot_run(load_case);
     plan.mesh = plan_mesh(load_case, pilot.contact_half_width);
@@ -233,6 +247,24 @@ RunConfiguration resolve_choices(const LoadCase& lc, const RunPlan& plan, const 
   c.linear_solver = choose_linear_solver(lc.solver.linear, static_cast<int>(largest));
   c.companion_contact_nodes = companion_contact_nodes(lc);
   return c;
+}
+
+LoadCase case_as_run(const LoadCase& lc, const RunConfiguration& c) {
+  LoadCase as_run = lc;
+  auto& mesh = as_run.mesh;
+  mesh.element = c.element == ElementKind::bbar ? ElementChoice::bbar : ElementChoice::q1;
+  // A flat punch's contact radius is its own (the key is refused for it).
+  if (lc.punch.shape != PunchShapeKind::flat) mesh.contact_half_width = c.plan.mesh.contact_half_width_estimate;
+  // A resumed run's configuration has dropped the zone (it starts from its own near field): the
+  // case keeps the one it was planned with.
+  if (!c.plan.plastic_zone.empty()) mesh.plastic_zone.clear();
+  for (std::size_t k = 0; k < c.plan.plastic_zone.depths.size(); ++k)
+    mesh.plastic_zone.push_back(
+        {c.plan.plastic_zone.depths[k], c.plan.plastic_zone.extents[k].width, c.plan.plastic_zone.extents[k].depth});
+  as_run.solver.jacobian = c.jacobian;
+  // solver.linear and solver.far_field stay as given: their "auto" is chosen on each mesh (the
+  // error estimate's companions are smaller), and summary.json's configuration says what it chose.
+  return as_run;
 }
 
 std::vector<std::pair<std::string, std::string>> describe(const RunConfiguration& c) {

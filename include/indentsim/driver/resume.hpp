@@ -11,9 +11,11 @@
 
 namespace indentsim {
 
-/// Builds a checkpoint of a running simulation and the rows it has reported.
+/// Builds a checkpoint of a running simulation, the rows it has reported and the true contacts
+/// recorded at the peaks passed (RunOutput::true_contacts).
 Checkpoint make_checkpoint(const Simulation& sim, const std::vector<IncrementRecord>& curve,
-                           const std::vector<double>& free_surface_depths);
+                           const std::vector<double>& free_surface_depths,
+                           const std::vector<std::pair<int, TrueContact>>& true_contacts = {});
 
 /// A simulation continuing a checkpoint, with `overrides` (--set) applied to its load case:
 /// validates everything (throws InputError naming the file and the problem) before returning.

@@ -20,17 +20,26 @@ struct CurveColumns {
   /// Units taken when neither given nor in the header ("" : such a file is refused).  The fit
   /// reads its data in SI by default (m, and the case's force unit).
   std::string default_depth_unit, default_force_unit;
+  /// Also accept a force per unit length (N/m, mN/m, uN/m, nN/m): a plane-strain curve, as the fit
+  /// reads it.  Off, such a unit is refused as not a force unit.
+  bool force_per_length = false;
 };
 
 struct LoadDepthCurve {
   std::vector<double> depth, force;  ///< [m], [N] (a plane-strain run's force: N/m)
   std::vector<std::size_t> rows;     ///< the CSV row (from 1) of each point, for messages
   std::string depth_unit, force_unit;  ///< the units the file was read in
+  /// The force unit was given (CurveColumns::force_unit) or written in the header, not the default.
+  bool force_unit_declared = false;
 };
 
 /// Scale factor of a depth unit to metres / a force unit to newtons; 0 when not a known unit.
 double depth_unit_factor(const std::string& unit);
 double force_unit_factor(const std::string& unit);
+/// A force per unit length ("N/m", "mN/m", ...) to N/m, or a force to N; 0 when neither.
+double force_or_per_length_unit_factor(const std::string& unit);
+/// True for a force per unit length ("N/m", "mN/m", ...).
+bool is_per_length_force_unit(const std::string& unit);
 
 /// Reads the curve; throws InputError(file, key, problem) naming the file, the key (the column
 /// or unit setting concerned, e.g. "curve.depth_unit", or "row 12") and what is wrong.

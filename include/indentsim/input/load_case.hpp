@@ -1,6 +1,7 @@
 #pragma once
 // A load case: everything a run needs, read from a TOML file (SI units throughout).
 // The section and key names are fixed by the project so that load cases stay portable.
+#include <array>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -76,6 +77,14 @@ struct MeshInput {
   ErrorEstimateChoice error_estimate = ErrorEstimateChoice::richardson;
   /// The relative error of the final P asked for: the run chooses contact_nodes (error_estimate.hpp).
   std::optional<double> target_error;
+  /// The pilot run's plastic zone as it grew: [depth h, width, depth below the surface] [m] at the
+  /// pilot's increments.  case.toml records it (with contact_half_width, the pilot's other
+  /// measurement) so that the case as run plans the same condensed near field without a pilot.
+  std::vector<std::array<double, 3>> plastic_zone;
+  /// The largest mesh a case may plan, in unknowns: a slip (a cone of half-angle 1e-300, a depth
+  /// in nm written as m) otherwise plans millions of them and runs for minutes before it fails.
+  /// Raise it for a mesh that is meant to be so large.
+  int max_unknowns = 2'000'000;
 };
 
 struct OutputInput {
@@ -166,6 +175,9 @@ void validate(const LoadCase& load_case);
 /// The load case as TOML (every key, defaults filled in): what a run actually used.
 std::string to_toml(const LoadCase& load_case);
 
+/// The smallest elastic-limit strain e0 a case may give (directly or as sigma_y / (3 mu)): solids
+/// yield at 1e-5 to 1e-1; below 1e-9 the laws' ratios e_u / e0 leave double precision.
+inline constexpr double min_elastic_limit_strain = 1e-9;
 /// The uniaxial yield stress of Ilyushin's law: sigma_y = sigma_u(e0) = 3 mu e0, mu = E / (2 (1 + nu)).
 double yield_stress_of_e0(double e0, double E, double nu);
 /// Its inverse, e0 = sigma_y / (3 mu): how material.yield_stress becomes e0.
@@ -176,11 +188,29 @@ struct KeyDescription {
   std::string key;            ///< section.name
   std::string type, default_value, range, unit, help;
   bool required = false;
+  /// default_value is a value of the key (TOML text), not words about it ("from e0").
+  bool default_is_value = true;
 };
 /// Every key a load case accepts, in case.toml's order, from the same declarations the reader uses.
 std::vector<KeyDescription> describe_keys();
 /// The keys as a Markdown table (the README's).
 std::string keys_markdown();
+/// What is wrong with `value` for the number key `key` ("material.E") against the interval its
+/// declared range words state ("must lie in [1e-100, 1e100] (got 1e+300)"), or nullopt when it
+/// lies inside, or the key declares no interval.  The fit holds its bounds to it.
+std::optional<std::string> declared_interval_problem(const std::string& key, double value);
+/// The magnitudes a key's values plausibly have, as its declaration states them (implausible_values
+/// warns outside them), or nullopt when it states none.
+struct PlausibleMagnitudes {
+  double low = 0.0, high = 0.0;
+  std::string of_what;  ///< "the moduli of solids (soft gels to diamond)"
+};
+std::optional<PlausibleMagnitudes> plausible_magnitudes(const std::string& key);
+
+/// Warnings for values given outside the magnitudes of their kind (a modulus of 70 Pa, a yield
+/// stress of 300 Pa, a depth of 50 m), each naming the key as the case gave it: most are unit
+/// slips, which run and give results off by 1e3 to 1e9.
+std::vector<std::string> implausible_values(const LoadCase& lc);
 
 /// The first key among the physics and mesh keys (geometry, punch, material, mesh) where two
 /// load cases differ, or "" if they agree: what a resumed run may not change.

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "indentsim/analysis/indentation_analysis.hpp"
 #include "indentsim/simulation/load_stepping.hpp"
 #include "indentsim/simulation/simulation_state.hpp"
 
@@ -20,7 +21,9 @@ namespace indentsim {
 
 // Format 2: the condensed near field joined the state.  Format 3: the material history holds four
 // strain components (eps33, the hoop strain of axisymmetry).  No older format is read.
-constexpr std::uint32_t checkpoint_format_version = 4;  // 4: the pilot's plastic zone growth
+// 4: the pilot's plastic zone growth; 5: the true contacts of the peaks passed, and the case as run
+// (the pilot's measurements as keys).
+constexpr std::uint32_t checkpoint_format_version = 5;
 
 struct Checkpoint {
   std::string load_case_toml;            ///< to_toml() of the load case as run
@@ -29,6 +32,9 @@ struct Checkpoint {
   SimulationState state;
   std::vector<IncrementRecord> curve;    ///< every row written so far
   std::vector<double> free_surface_depths;  ///< per row, for summary.json
+  /// The exact unloading stiffness and contact radius at each peak passed (summary.json's truth
+  /// of the branches: they need the live state at the peak, which a resume no longer has).
+  std::vector<std::pair<int, TrueContact>> true_contacts;
 };
 
 /// 64-bit FNV-1a: any single changed byte changes it.

@@ -90,6 +90,8 @@ public:
   std::vector<Unloading> unloadings() const;
   double peak_depth() const { return peak_depth_; }
   double peak_force() const { return peak_force_; }
+  /// The true contacts recorded so far, by peak step (a checkpoint keeps them for a resume).
+  const std::vector<std::pair<int, TrueContact>>& true_contacts() const { return truths_; }
 
 private:
   std::shared_ptr<const PunchShape> punch_;  // the indenter's area function (null: no analysis)
@@ -136,6 +138,12 @@ public:
   void resumed(const IncrementSnapshot& state) {
     if (!records_.empty()) record_true_contact(state, records_.back().step);
   }
+  /// The true contacts a resumed run recorded at its peaks before the checkpoint (the live states
+  /// that gave them are gone): its summary.json then holds what the uninterrupted run's does.
+  void restore_true_contacts(const std::vector<std::pair<int, TrueContact>>& truths) {
+    for (const auto& [step, truth] : truths) summary_.set_true_contact(step, truth);
+  }
+  const std::vector<std::pair<int, TrueContact>>& true_contacts() const { return summary_.true_contacts(); }
   /// Writes the final state's fields, the layer view and summary.json with `status` (not
   /// "failed": use fail()).
   /// `final_state`: the state the run ends in (the last row's).

@@ -41,6 +41,11 @@ struct RunConfiguration {
 /// not grow it ahead of the pilot's plastic zone (the plan's zone is dropped).
 RunConfiguration resolve_choices(const LoadCase& load_case, const RunPlan& plan,
                                  const std::optional<NearField>& near_field = std::nullopt);
+/// The case as it runs under `configuration`: the element and the Jacobian's "auto" replaced by
+/// their choice and the pilot's measurements (contact half-width, plastic zone) written as keys.  case.toml and checkpoints
+/// hold this, so that `run case.toml` plans the same mesh and makes the same choices without a
+/// pilot (bit for bit), and a resumed branch's case.toml reproduces the branch.
+LoadCase case_as_run(const LoadCase& load_case, const RunConfiguration& configuration);
 /// The configuration as (name, value) lines, in the words of `check` and of summary.json.
 std::vector<std::pair<std::string, std::string>> describe(const RunConfiguration& configuration);
 
