@@ -3,6 +3,7 @@
 // run is small and bounded in time.
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -10,6 +11,7 @@
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "indentsim/output/checkpoint.hpp"
 #include "indentsim/base/error.hpp"
@@ -241,4 +243,215 @@ TEST_F(Hostile, NoCoarseWarningAtAnUnloadedEnd) {
             0)
       << err();
   EXPECT_NE(err().find("coarse"), std::string::npos) << err();
+}
+
+// Round three of the hostile review (issue 37), in the forms the reviewer gave.
+
+// 1. What double precision cannot resolve is refused naming the key, by check as by run.
+TEST_F(Hostile, LengthsDoublePrecisionCannotResolveAreRefusedNamingTheKeyInCheckToo) {
+  const std::string paper = source_path("loadcases/paper.toml") + " --set mesh.contact_nodes=8";
+  for (const auto& [set, key] : std::vector<std::pair<std::string, std::string>>{
+           {"geometry.lx=1e295", "geometry.lx"},
+           {"geometry.lx=1e-300", "geometry.lx"},
+           {"mesh.fine_depth=1e-300", "mesh.fine_depth"},
+           {"mesh.fine_depth=1e-20", "mesh.fine_depth"},
+           {"mesh.fine_width=1e-300", "mesh.fine_width"},
+           {"mesh.contact_half_width=1e300", "mesh.contact_half_width"}}) {
+    SCOPED_TRACE(set);
+    EXPECT_EQ(cli("check " + paper + " --set " + set), 2) << err();
+    EXPECT_NE(err().find(key), std::string::npos) << err();
+    expect_refused("run " + paper + " --set " + set, key);
+  }
+  // A measured tip with a point closer than double precision resolves, or a height of 1e300.
+  const std::string tip = "run " + source_path("loadcases/axisymmetric/measured_profile.toml") + " --set mesh.contact_nodes=6";
+  expect_refused(tip + " --set 'punch.profile_points=[[0,0],[1e-300,1e-9],[2e-6,1e-6],[4e-6,4e-6]]'", "punch.profile_points");
+  expect_refused(tip + " --set 'punch.profile_points=[[0,0],[1e-6,1e300],[2e-6,1e300]]'", "punch.profile_points");
+  // A cone of half-angle 1e-300 plans no mesh of millions of unknowns: refused at once, naming
+  // the implausible angle.
+  const std::string cone = source_path("loadcases/axisymmetric/berkovich_cone.toml");
+  EXPECT_EQ(cli("check " + cone + " --set punch.half_angle=1e-300"), 2) << err();
+  EXPECT_NE(err().find("punch.half_angle = 1e-300"), std::string::npos) << err();
+}
+
+// Units: every dimensional key outside the magnitudes of its kind is warned about by its own
+// name; a yield stress that gives no elastic-limit strain is refused under the key given.
+TEST_F(Hostile, UnitSlipsAreNamedByTheKeyTheUserGave) {
+  const fs::path c = dir_ / "ys.toml";
+  std::string text = slurp(source_path("loadcases/paper.toml"));
+  text.replace(text.find("e0 = 0.027"), 10, "yield_stress = 300e6");
+  std::ofstream(c) << text;
+  EXPECT_EQ(cli("check " + c.string() + " --set material.yield_stress=30"), 2) << err();  // e0 below 1e-9
+  EXPECT_NE(err().find("material.yield_stress"), std::string::npos) << err();
+  EXPECT_EQ(cli("check " + c.string() + " --set material.yield_stress=3e6"), 0) << err();
+  EXPECT_EQ(err().find("material.yield_stress ="), std::string::npos) << err();
+  EXPECT_EQ(cli("check " + c.string() + " --set material.yield_stress=3e4"), 0) << err();
+  EXPECT_NE(err().find("material.yield_stress = 30000 Pa lies outside"), std::string::npos) << err();
+  EXPECT_EQ(cli("check " + c.string() + " --set material.E=70"), 2) << err();  // sigma_y / 3 mu = 1e7
+  EXPECT_NE(err().find("material.yield_stress"), std::string::npos) << err();
+  EXPECT_NE(err().find("material.E = 70"), std::string::npos) << err();
+  EXPECT_EQ(err().find("material.e0"), std::string::npos) << err();
+  EXPECT_EQ(cli("check " + c.string() + " --set material.E=1e400"), 2) << err();
+  EXPECT_NE(err().find("beyond double precision"), std::string::npos) << err();
+  // A cone's contact too large for its specimen asks about the depth, not a radius it has not.
+  EXPECT_EQ(cli("check " + source_path("loadcases/axisymmetric/berkovich_cone.toml") + " --set geometry.lx=1e-5 "
+                "--set geometry.ly=1e-5"),
+            0)
+      << err();
+  EXPECT_EQ(err().find("punch.radius"), std::string::npos) << err();
+  EXPECT_NE(err().find("load.path"), std::string::npos) << err();
+}
+
+// Without output.dir a run goes to out/<case name>, so two cases run from one folder keep theirs.
+TEST_F(Hostile, RunsOfDifferentCasesKeepTheirOwnFolders) {
+  std::string text = slurp(elastic);
+  text.erase(text.find("dir = "), text.find('\n', text.find("dir = ")) - text.find("dir = ") + 1);
+  std::ofstream(dir_ / "steel.toml") << text;
+  std::ofstream(dir_ / "glass.toml") << text;
+  const std::string in_the_folder = "cd " + dir_.string() + " &&";
+  ASSERT_EQ(cli("run steel.toml" + small, in_the_folder), 0) << err();
+  ASSERT_EQ(cli("run glass.toml" + small, in_the_folder), 0) << err();
+  EXPECT_TRUE(fs::is_regular_file(dir_ / "out" / "steel" / "curve.csv"));
+  EXPECT_TRUE(fs::is_regular_file(dir_ / "out" / "glass" / "curve.csv"));
+}
+
+// An instrument's export: '#' comments, "Number of Points = N", a title line, tab-separated.
+TEST_F(Hostile, InstrumentHeadersWithCommentsAndMetadataLinesAreRead) {
+  const fs::path file = dir_ / "hysitron.txt";
+  std::ofstream out(file);
+  out << "# exported by the instrument\nNumber of Points = 19\nSample A\n\nDepth (nm)\tLoad (uN)\n";
+  for (int k = 0; k <= 6; ++k) out << 20 * k << "\t" << 2.0 * k * k << "\n";
+  for (int k = 11; k >= 0; --k) out << 100 + 20.0 * k / 12 << "\t" << 72.0 * std::pow(k / 12.0, 1.5) << "\n";
+  out.close();
+  EXPECT_EQ(cli("analyze " + file.string() + " --set punch.shape=cone --set punch.half_angle=70.3"), 0) << err();
+  EXPECT_EQ(err().find("error"), std::string::npos) << err();
+}
+
+// 2. A warning stored in a checkpoint is printed escaped on resume, never raw.
+TEST_F(Hostile, AWarningStoredInACheckpointIsPrintedEscaped) {
+  const fs::path run = dir_ / "run";
+  ASSERT_EQ(cli("run " + elastic + small + " --set output.checkpoint_every=2 --out " + run.string()), 0) << err();
+  const fs::path forged = edited_checkpoint(run / "checkpoints" / "checkpoint_000002.ck", dir_ / "forged.ck", [](Checkpoint& c) {
+    c.state.warnings.push_back(std::string("\x1b[2J") + std::string(1, '\0') + std::string(1 << 20, 'w'));
+  });
+  cli("resume " + forged.string() + " --quiet --out " + (dir_ / "resumed").string());
+  EXPECT_EQ(err().find('\x1b'), std::string::npos);
+  EXPECT_LT(err().size() + out().size(), 20000u);
+}
+
+// 3. Resumed after the peak, summary.json keeps the peak's true contact (S_exact, true_H, ...).
+TEST_F(Hostile, AResumeAfterThePeakKeepsThePeaksTrueContact) {
+  const std::string cone = source_path("loadcases/axisymmetric/berkovich_cone.toml") +
+                           " --quiet --set mesh.contact_nodes=8 --set output.checkpoint_every=2 "
+                           "--set output.keep_checkpoints='\"all\"'";
+  const fs::path whole = dir_ / "whole", resumed = dir_ / "resumed";
+  ASSERT_EQ(cli("run " + cone + " --out " + whole.string()), 0) << err();
+  ASSERT_EQ(cli("resume " + (whole / "checkpoints" / "checkpoint_000030.ck").string() + " --quiet --out " +
+                resumed.string()),
+            0)
+      << err();
+  const auto a = nlohmann::json::parse(slurp(whole / "summary.json"));
+  const auto b = nlohmann::json::parse(slurp(resumed / "summary.json"));
+  const auto& ua = a.at("unloading").at(0).at("analysis");
+  const auto& ub = b.at("unloading").at(0).at("analysis");
+  for (const char* key : {"S_exact", "true_H", "true_area", "true_contact_radius", "pile_up_ratio"}) {
+    SCOPED_TRACE(key);
+    ASSERT_TRUE(ua.at(key).is_number());
+    EXPECT_EQ(ua.at(key), ub.at(key));
+  }
+}
+
+// 4. A run folder moved or copied resumes where it is, keeping its files.
+TEST_F(Hostile, AMovedRunFolderResumesWhereItIsAndKeepsItsFiles) {
+  const fs::path a = dir_ / "A", moved = dir_ / "B2";
+  ASSERT_EQ(cli("run " + elastic + small + " --set load.increments=8 --set output.fields_every=1 "
+                "--set output.checkpoint_every=2 --set output.keep_checkpoints='\"all\"' --out " + a.string()),
+            0)
+      << err();
+  fs::remove(a / "checkpoints" / "checkpoint_000008.ck");
+  fs::rename(a, moved);
+  ASSERT_EQ(cli("resume " + moved.string() + " --quiet"), 0) << err();
+  EXPECT_FALSE(fs::exists(a));
+  EXPECT_NE(slurp(moved / "summary.json").find("\"finished\""), std::string::npos);
+  ASSERT_EQ(cli("resume " + (moved / "checkpoints" / "checkpoint_000004.ck").string() + " --quiet --out " + moved.string()), 0)
+      << err();
+  std::size_t vtus = 0, checkpoints = 0;
+  for (const auto& e : fs::directory_iterator(moved / "fields")) vtus += e.path().extension() == ".vtu";
+  for (const auto& e : fs::directory_iterator(moved / "checkpoints")) checkpoints += e.path().extension() == ".ck";
+  EXPECT_EQ(vtus, 9u);
+  EXPECT_EQ(checkpoints, 4u);
+}
+
+// 5. A branch's case.toml reproduces the branch (the pilot's measurements are in it).
+TEST_F(Hostile, ABranchsCaseTomlReproducesTheBranch) {
+  const std::string plastic = source_path("loadcases/load_unload.toml") + " --quiet --set mesh.contact_nodes=8";
+  const fs::path run = dir_ / "R", branch = dir_ / "BR", again = dir_ / "again";
+  ASSERT_EQ(cli("run " + plastic + " --out " + run.string()), 0) << err();
+  ASSERT_EQ(cli("resume " + (run / "checkpoints" / "checkpoint_000010.ck").string() +
+                " --quiet --set 'load.path=[0,5e-5,2e-5]' --set 'load.increments=[10,10]' --out " + branch.string()),
+            0)
+      << err();
+  ASSERT_EQ(cli("run " + (branch / "case.toml").string() + " --quiet --out " + again.string()), 0) << err();
+  // Column 2 is P; equal to the solver's tolerance (the resumed branch starts from the run's own
+  // near field, the rerun from the pilot's zone: condensation is exact, round-off is not shared).
+  const auto a = indentsim::testing::read_curve(branch / "curve.csv"), b = indentsim::testing::read_curve(again / "curve.csv");
+  ASSERT_EQ(a.size(), b.size());
+  double peak = 0.0;
+  for (const auto& row : a) peak = std::max(peak, row[2]);
+  for (std::size_t k = 0; k < a.size(); ++k) EXPECT_NEAR(a[k][2], b[k][2], 1e-8 * peak) << "row " << k;
+}
+
+// 8. The output tree is checked before anything is locked or removed.
+TEST_F(Hostile, WhatARunCannotReplaceIsFoundBeforeItRemovesAnything) {
+  const fs::path run = dir_ / "run";
+  ASSERT_EQ(cli("run " + elastic + small + " --out " + run.string()), 0) << err();
+  fs::create_directories(run / "fields" / "step_000050.vtu" / "x");
+  EXPECT_EQ(cli("check " + elastic + " --set output.dir='\"" + run.string() + "\"'"), 2) << err();
+  EXPECT_EQ(cli("run " + elastic + small + " --out " + run.string()), 2) << err();
+  EXPECT_NE(err().find("step_000050.vtu"), std::string::npos) << err();
+  EXPECT_TRUE(fs::exists(run / "case.toml"));
+  fs::remove_all(run / "fields" / "step_000050.vtu");
+  fs::remove(run / ".indentsim.lock");
+  fs::create_directories(run / ".indentsim.lock");
+  EXPECT_EQ(cli("check " + elastic + " --set output.dir='\"" + run.string() + "\"'"), 2) << err();
+  EXPECT_NE(err().find(".indentsim.lock"), std::string::npos) << err();
+  fs::remove(run / ".indentsim.lock");
+  EXPECT_EQ(cli("run " + elastic + small + " --set output.dir='\"a\\u0000b\"'"), 2) << err();
+  EXPECT_FALSE(fs::exists(dir_ / "a"));
+}
+
+// 11. Messages name what is wrong.
+TEST_F(Hostile, MessagesNameTheKeyAndTheFieldThatAreWrong) {
+  const fs::path run = dir_ / "run";
+  ASSERT_EQ(cli("run " + elastic + small + " --set output.checkpoint_every=2 --out " + run.string()), 0) << err();
+  EXPECT_EQ(cli("resume " + (run / "checkpoints" / "checkpoint_000002.ck").string() +
+                " --set 'load.path=[0,4e-5,0]' --out " + (dir_ / "b").string()),
+            2);
+  EXPECT_NE(err().find("load.path"), std::string::npos) << err();
+  EXPECT_EQ(cli("resume " + (run / "checkpoints" / "checkpoint_000002.ck").string() +
+                " --set solver.tolerance=1e-4 --out " + (dir_ / "t").string()),
+            2);
+  EXPECT_NE(err().find("solver.tolerance"), std::string::npos) << err();
+  EXPECT_EQ(cli("analyze " + (dir_ / "missing.csv").string()), 2);
+  EXPECT_NE(err().find("does not exist"), std::string::npos) << err();
+  const fs::path empty = dir_ / "empty";
+  fs::create_directories(empty);
+  EXPECT_EQ(cli("plot " + empty.string()), 2);
+  EXPECT_NE(err().find("holds no run"), std::string::npos) << err();
+  EXPECT_EQ(cli("plot " + run.string() + " --step 99999"), 2);
+  EXPECT_NE(err().find("--step"), std::string::npos) << err();
+  const fs::path profile = dir_ / "tip.csv";
+  std::ofstream(profile) << "r,g\n0,0\n1e-6,nan\n2e-6,1e-6\n";
+  std::string text = slurp(source_path("loadcases/axisymmetric/measured_profile.toml"));
+  std::ofstream(dir_ / "tip.toml") << text.replace(text.find("\"tip_profile.csv\""), 17, "\"tip.csv\"");
+  EXPECT_EQ(cli("check " + (dir_ / "tip.toml").string()), 2);
+  EXPECT_NE(err().find("g = \"nan\""), std::string::npos) << err();
+  // Depth in nm declared as m: H of no solid, warned.
+  const fs::path nm = dir_ / "nm.csv";
+  std::ofstream out(nm);
+  out << "Depth (m),Load (mN)\n";
+  for (int k = 0; k <= 6; ++k) out << 20 * k << "," << 2.0 * k * k << "\n";
+  for (int k = 11; k >= 0; --k) out << 100 + 20.0 * k / 12 << "," << 72.0 * std::pow(k / 12.0, 1.5) << "\n";
+  out.close();
+  EXPECT_EQ(cli("analyze " + nm.string() + " --set punch.shape=cone --set punch.half_angle=70.3"), 0) << err();
+  EXPECT_NE(err().find("no solid's"), std::string::npos) << err();
 }

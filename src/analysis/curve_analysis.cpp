@@ -25,7 +25,12 @@ std::map<std::size_t, TrueContact> recorded_truths(const fs::path& summary_file)
   std::ifstream in(summary_file);
   if (!in) return truths;
   const nlohmann::json summary = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
-  if (!summary.is_object() || !summary.contains("unloading") || !summary["unloading"].is_array()) return truths;
+  // A summary.json that is not the run's (damaged, edited) is said, not silently read as "no
+  // truth": the analysis would lose the true contact numbers without a word.
+  if (!summary.is_object() || !summary.contains("unloading") || !summary["unloading"].is_array())
+    throw InputError(summary_file.string(), "summary.json",
+                     "is damaged or not a run's summary (no \"unloading\" list): the true contact numbers of the "
+                     "branches cannot be read; run the case again or analyse its curve.csv as a measured curve");
   for (const auto& u : summary["unloading"]) {
     if (!u.is_object() || !u.contains("step") || !u["step"].is_number_unsigned()) continue;
     if (!u.contains("analysis") || !u["analysis"].is_object()) continue;
@@ -136,6 +141,24 @@ CurveAnalysis analyze_run_curve(const fs::path& path, const std::vector<std::str
   return c;
 }
 
+std::vector<std::string> implausible_results(const CurveAnalysis& c) {
+  constexpr double min_hardness = 1e5, max_hardness = 1e12, min_modulus = 1e3, max_modulus = 2e12;  // [Pa]
+  std::vector<std::string> warnings;
+  for (const AnalyzedBranch& b : c.branches) {
+    const BranchAnalysis& r = b.result;
+    const bool hardness_off = r.hardness > 0.0 && (r.hardness < min_hardness || r.hardness > max_hardness);
+    const bool modulus_off =
+        r.reduced_modulus && (*r.reduced_modulus < min_modulus || *r.reduced_modulus > max_modulus);
+    if (!hardness_off && !modulus_off) continue;
+    warnings.push_back(fmt::format(
+        "{}: H = {:.3g} Pa{} is no solid's (H {:g} to {:g} Pa, E_r {:g} to {:g} Pa): are the depth unit ({}) and "
+        "the force unit ({}) the file's?",
+        b.label, r.hardness, r.reduced_modulus ? fmt::format(", E_r = {:.3g} Pa", *r.reduced_modulus) : "",
+        min_hardness, max_hardness, min_modulus, max_modulus, c.depth_unit, c.force_unit));
+  }
+  return warnings;
+}
+
 CurveAnalysis analyze_curve(const fs::path& curve, std::vector<std::string> overrides,
                             const MeasuredCurveOptions& o) {
   if (is_run_output(curve)) {
@@ -145,6 +168,9 @@ CurveAnalysis analyze_curve(const fs::path& curve, std::vector<std::string> over
     return analyze_run_curve(curve, overrides);
   }
   std::error_code ec;
+  if (!fs::exists(curve, ec))
+    throw InputError(curve.string(), "curve", "does not exist (give a run's output folder or a CSV file of a "
+                                              "load-depth curve)");
   if (!fs::is_regular_file(curve, ec))
     throw InputError(curve.string(), "curve", "is neither a run's output folder nor a CSV file of a load-depth curve");
   for (const auto& [key, value] : {std::pair{"curve.depth_column", o.depth_column}, {"curve.force_column", o.force_column},

@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <unistd.h>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -180,15 +181,39 @@ fs::path figure_script(const std::string& for_what) {
   throw InputError(for_what, "python3", fmt::format("cannot run {}: {}", python, std::strerror(errno)));
 }
 
-/// `indentsim plot DIR [--step N]`: the figure script beside this executable, run by Debian's
+/// `indentsim plot DIR [--step N] [--data CSV] [--size slide|column]`: the figure script beside this executable, run by Debian's
 /// python3 (the one the setup script gives matplotlib), whatever python3 comes first on the PATH.
-int command_plot(const std::string& dir, const std::optional<int>& step) {
+int command_plot(const std::string& dir, const std::optional<int>& step, const std::string& data,
+                 const std::string& size) {
   const fs::path script = figure_script(dir);
-  if (!fs::is_directory(dir)) throw InputError(dir, "plot", "is not a run's output folder");
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) throw InputError(dir, "plot", "is not a run's or a sweep's output folder");
+  const bool sweep = fs::is_regular_file(fs::path(dir) / "results.csv", ec);
+  const bool run = fs::is_regular_file(fs::path(dir) / "case.toml", ec) && fs::is_regular_file(fs::path(dir) / "curve.csv", ec);
+  if (!sweep && !run)
+    throw InputError(dir, "plot", "holds no run (case.toml and curve.csv) and no sweep (results.csv): nothing to draw");
   std::vector<std::string> args{script.string(), dir};
   if (step) {
+    if (!run) throw InputError(dir, "--step", "is for a run's folder, not a sweep's");
+    // The curve's rows are its increments 0..N: a step beyond them has no state to show.
+    std::ifstream curve(fs::path(dir) / "curve.csv");
+    long rows = -1;  // the header
+    for (std::string line; std::getline(curve, line);)
+      if (!line.empty()) ++rows;
+    if (*step < 0 || *step >= rows)
+      throw InputError(dir, "--step", fmt::format("{} is not an increment of the run (it has 0 to {})", *step, rows - 1));
     args.push_back("--step");
     args.push_back(std::to_string(*step));
+  }
+  if (!data.empty()) {
+    if (!run) throw InputError(dir, "--data", "overlays a measured curve on a run's, not on a sweep's");
+    if (!fs::is_regular_file(data, ec)) throw InputError(data, "--data", "is not a readable file");
+    args.push_back("--data");
+    args.push_back(data);
+  }
+  if (!size.empty()) {
+    args.push_back("--size");
+    args.push_back(size);
   }
   exec_python(args, dir);
 }
@@ -203,17 +228,26 @@ int command_analyze(const std::string& curve, const std::vector<std::string>& ov
   const fs::path script = plot ? figure_script(curve) : fs::path();
   write_file_atomically(out, analysis_json(analysis).dump(2) + "\n");
   fmt::print("{}analysis: {}\n", analysis_table(analysis), out.string());
+  for (const std::string& w : implausible_results(analysis)) fmt::print(stderr, "warning: {}\n", w);
   if (plot) exec_python({script.string(), "--analysis", out.string()}, curve);
   return 0;
 }
 
 /// `indentsim fit`: material parameters from measured curves (fit.hpp); writes DIR/fit.json,
 /// DIR/fit_curves.csv, DIR/fitted_case.toml (one per data set beyond the first: fitted_case_K.toml)
-/// and the figure DIR/fit.png.  Bad input exits 2 before any run, with nothing written.
+/// and the figure DIR/fit.png.  Exit status: 0 a good fit; 3 a poor fit (rms misfit beyond
+/// poor_fit_rms_limit of the peak, or a parameter at a bound: the files are written, fit.json's
+/// "quality" says why, each problem is a warning); 2 bad input, before any run, with nothing
+/// written; 128 + signal after SIGINT/SIGTERM (nothing written; the best parameters so far on
+/// stderr).  -q: no progress line and no notes, only the result, warnings and errors.
 int command_fit(FitCommandLine cl, bool quiet, bool plot) {
+  constexpr int exit_poor_fit = 3;  // like a run that did not converge: what was computed is kept
   FitJob job = read_fit_job(cl);
   const bool terminal = isatty(fileno(stderr)) != 0;
-  if (!quiet)
+  bool progress_shown = false;
+  if (!quiet) {
+    for (const std::string& note : job.notes) fmt::print("note: {}\n", note);
+    std::fflush(stdout);
     job.problem.settings.on_iteration = [&](const FitProgress& p) {
       std::string values;
       for (std::size_t j = 0; j < p.theta.size(); ++j)
@@ -222,27 +256,91 @@ int command_fit(FitCommandLine cl, bool quiet, bool plot) {
                                                     : fmt::format("fit {} start {}/{}", p.phase, p.start, p.starts);
       fmt::print(stderr, "{}{} iteration {:>2}  cost {:.4e}{}  ({} runs, {} coarse){}", terminal ? "\r\033[K" : "",
                  where, p.iteration, p.cost, values, p.forward_runs, p.coarse_runs, terminal ? "" : "\n");
+      progress_shown = terminal;
     };
-  const FitResult result = fit(job.problem);
-  if (!quiet && terminal) fmt::print(stderr, "\n");
+  }
+  job.problem.settings.on_warning = [&](const std::string& warning) {
+    if (progress_shown) fmt::print(stderr, "\r\033[K");
+    fmt::print(stderr, "warning: {}\n", warning);
+  };
+  FitResult result;
+  try {
+    result = fit(job.problem);
+  } catch (const FitInterrupted& e) {
+    if (progress_shown) fmt::print(stderr, "\n");
+    fmt::print(stderr, "fit stopped by signal {} after {} forward run(s) ({} more on the coarse meshes); nothing written to {}\n",
+               e.signal(), e.forward_runs(), e.coarse_runs(), job.out_dir);
+    if (e.best().empty()) {
+      fmt::print(stderr, "no start had reached a successful forward run: no parameters to keep\n");
+    } else {
+      // The --set options in the keys the case gives (a case with e0 refuses a yield stress).
+      const MaterialInput& given = job.problem.data.front().load_case.material;
+      MaterialInput best = given;
+      for (std::size_t j = 0; j < e.best().size(); ++j) set_value(best, job.problem.free[j].parameter, e.best()[j]);
+      std::string values, sets;
+      for (std::size_t j = 0; j < e.best().size(); ++j) {
+        const MaterialParameter parameter = job.problem.free[j].parameter;
+        values += fmt::format("  {}={:.6g}", key_of(parameter), e.best()[j]);
+        if (parameter == MaterialParameter::yield_stress && !given.yield_stress)
+          sets += fmt::format(" --set material.e0={:.6g}", best.e0);
+        else
+          sets += fmt::format(" --set {}={:.6g}", key_of(parameter), e.best()[j]);
+      }
+      fmt::print(stderr, "the best parameters so far ({}, cost {:.4e}; not a converged fit):{}\nto fit again from there:{}\n",
+                 e.phase() == "coarse" ? "on the coarse meshes" : "on the cases' own meshes", e.cost(), values, sets);
+    }
+    return 128 + e.signal();
+  }
+  if (progress_shown) fmt::print(stderr, "\n");
   const fs::path dir = job.out_dir;
   write_fit_results(dir, job.problem, result);
   fmt::print("fit of {} data set(s), {} forward runs (and {} on the coarse meshes), {:.1f} s ({}):\n",
              job.problem.data.size(), result.forward_runs, result.coarse_runs, result.wall_seconds,
              result.data.front().gradients);
   for (std::size_t j = 0; j < result.values.size(); ++j)
-    fmt::print("  {:<22} {:.6g} +- {:.3g}\n", key_of(job.problem.free[j].parameter), result.values[j], result.std_errors[j]);
-  fmt::print("  rms residual {:.3g}% (relative); condition number {:.3g}: {}\n", 100.0 * result.rms_relative,
-             result.condition_number, result.identifiable ? "identifiable" : "NOT identifiable");
-  if (!result.identifiable) fmt::print("  {}\n", result.poorly_determined);
-  fmt::print("results: {}\n", (dir / "fit.json").string());
+    fmt::print("  {:<22} {:.6g} +- {}\n", key_of(job.problem.free[j].parameter), result.values[j],
+               std::isfinite(result.std_errors[j]) ? fmt::format("{:.3g}", result.std_errors[j]) : std::string("(undetermined)"));
+  if (result.good())
+    fmt::print("  rms residual {:.3g}% (relative); condition number {:.3g}: {}\n", 100.0 * result.rms_relative,
+               result.condition_number, result.identifiable ? "identifiable" : "NOT identifiable");
+  else
+    fmt::print("  rms residual {:.3g}% (relative); condition number {:.3g}; {}\n", 100.0 * result.rms_relative,
+               result.condition_number, result.quality);
+  if (!result.poorly_determined.empty()) fmt::print("  {}\n", result.poorly_determined);
+  if (!quiet && (result.failed_runs > 0 || result.refused_evaluations > 0))
+    fmt::print("  {} forward run(s) failed even with steps a sixteenth as long, and {} parameter point(s) were refused "
+               "by the model; the optimiser stepped back from each\n",
+               result.failed_runs, result.refused_evaluations);
+  for (const std::string& problem : result.quality_problems)
+    fmt::print(stderr, "warning: poor fit: {} ({})\n", problem,
+               problem.find(" bound ") != std::string::npos
+                   ? "the optimum lies at or beyond it, so the value is no estimate: widen --bounds, or check the data"
+                   : fmt::format("a fit that describes its data stays below {:g}%: check the force column's sign and "
+                                 "unit, the scene (axisymmetric or plane strain) and the load case",
+                                 100.0 * poor_fit_rms_limit));
+  fmt::print("results: {}{}\n", (dir / "fit.json").string(), result.good() ? "" : " (quality: poor fit)");
+  const int status = result.good() ? 0 : exit_poor_fit;
   if (plot) {
     std::error_code ec;
     const fs::path script = fs::read_symlink("/proc/self/exe", ec).parent_path() / "plot_fit.py";
-    if (!ec && fs::is_regular_file(script)) exec_python({script.string(), dir.string()}, dir.string());
-    fmt::print(stderr, "warning: the figure script plot_fit.py is not beside the executable; no figure\n");
+    if (ec || !fs::is_regular_file(script)) {
+      fmt::print(stderr, "warning: the figure script plot_fit.py is not beside the executable; no figure\n");
+    } else if (status == 0) {
+      exec_python({script.string(), dir.string()}, dir.string());
+    } else {
+      // A poor fit's figure is drawn by a child process, so that the exit status stays the fit's.
+      const auto quoted = [](const std::string& text) {
+        std::string q = "'";
+        for (char c : text) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+        return q + "'";
+      };
+      const std::string python = fs::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
+      std::fflush(stdout);
+      if (std::system((quoted(python) + " " + quoted(script.string()) + " " + quoted(dir.string())).c_str()) != 0)
+        fmt::print(stderr, "warning: the figure of {} could not be drawn\n", dir.string());
+    }
   }
-  return 0;
+  return status;
 }
 
 struct SweepOptions {
@@ -270,36 +368,75 @@ struct SweepOptions {
   exec_python(args, file);
 }
 
+/// A result.json that is no result, on stderr: the file, what is wrong, and what happens.
+void warn_damaged(const SweepRunLookup& found, const std::string& then) {
+  fmt::print(stderr, "warning: {}: {}; {}\n", found.file.string(), found.problem, then);
+}
+
 /// `indentsim sweep SWEEP.toml`: the sweep expanded and validated (exit 2 naming the key, nothing
 /// started), its manifest written; then one of: every run in this process and the table (the
 /// default), one shard (--shard i/N), the Slurm array's script (--slurm), the table of what is
-/// done (--collect), or the runs listed (--list).  Runs with a result are never run again.
+/// done (--collect), or the runs listed (--list).  Runs with a result are never run again; a
+/// result.json that is no whole result of its run is named in a warning and its run done again.
+/// Runs are numbered from 0, as in results.csv.  SIGINT/SIGTERM stop it within a run's expansion
+/// or at the next Newton iteration of a run.
 int command_sweep(const std::string& file, const SweepOptions& o, bool quiet) {
   if (o.dask) {
-    expand_sweep(read_sweep_definition(file));  // bad input exits 2 here, before Python starts
+    try {
+      expand_sweep(read_sweep_definition(file));  // bad input exits 2 here, before Python starts
+    } catch (const Interrupted& e) {
+      fmt::print(stderr, "sweep stopped by signal {} while {} was expanded: nothing was started\n", e.signal(), file);
+      return 128 + e.signal();
+    }
     exec_dask_sweep(file, o, quiet);
   }
   const bool sharded = !o.shard.empty();
   const auto [i, n] = sharded ? parse_shard(o.shard) : std::pair{1, 1};
-  const SweepManifest manifest = expand_sweep(read_sweep_definition(file));
+  SweepManifest manifest;
+  try {
+    manifest = expand_sweep(read_sweep_definition(file));
+  } catch (const Interrupted& e) {
+    fmt::print(stderr, "sweep stopped by signal {} while {} was expanded: nothing was started\n", e.signal(), file);
+    return 128 + e.signal();
+  }
   const SweepResults results(manifest.definition.out);
   if (manifest.merged_duplicates > 0)
     fmt::print(stderr, "note: {} combination(s) of {} gave the case of an earlier run; each case is run once ({} runs)\n",
                manifest.merged_duplicates, file, manifest.runs.size());
   if (o.list) {
     for (const SweepRun& r : manifest.runs) {
+      if (const int signal = interruption_requested()) return 128 + signal;
       std::string values;
       for (std::size_t j = 0; j < manifest.keys.size(); ++j) values += fmt::format("  {} = {}", manifest.keys[j], r.values[j]);
-      fmt::print("{:>6} {} {}{}\n", r.index + 1, r.hash, results.complete(r.hash) ? "done   " : "pending", values);
+      const SweepRunLookup found = results.look_up(r.hash);
+      if (!found.problem.empty()) warn_damaged(found, "listed as pending (the sweep does the run again)");
+      fmt::print("{:>6} {} {}{}\n", r.index, r.hash, found.result ? "done   " : "pending", values);
     }
-    fmt::print("{}: {} runs\n", file, manifest.runs.size());
+    fmt::print("{}: {} runs (numbered from 0, as in results.csv)\n", file, manifest.runs.size());
     return 0;
   }
-  results.write_manifest(manifest);
-  if (o.collect) {
+  try {
+    results.write_manifest(manifest);
+  } catch (const Interrupted& e) {
+    fmt::print(stderr, "sweep stopped by signal {} while its manifest was written: nothing was started\n", e.signal());
+    return 128 + e.signal();
+  }
+  const auto collect = [&](bool with_pending) {
     const SweepTally t = results.collect(manifest);
-    fmt::print("{} runs: {} finished, {} not converged, {} failed, {} pending\ntable: {}\n", t.runs, t.finished,
-               t.not_converged, t.failed, t.pending, results.table_path().string());
+    for (const std::string& problem : t.problems)
+      fmt::print(stderr, "warning: {}; its row is pending (the sweep does the run again)\n", problem);
+    fmt::print("{} runs: {} finished, {} not converged, {} failed", t.runs, t.finished, t.not_converged, t.failed);
+    if (with_pending || t.pending > 0) fmt::print(", {} pending", t.pending);
+    if (t.damaged > 0) fmt::print(" ({} of them with a damaged result, named above)", t.damaged);
+    fmt::print("\ntable: {}\n", results.table_path().string());
+  };
+  if (o.collect) {
+    try {
+      collect(true);
+    } catch (const Interrupted& e) {
+      fmt::print(stderr, "sweep --collect stopped by signal {}: the table was not written\n", e.signal());
+      return 128 + e.signal();
+    }
     return 0;
   }
   if (o.slurm) {
@@ -323,16 +460,23 @@ int command_sweep(const std::string& file, const SweepOptions& o, bool quiet) {
   int done = 0, skipped = 0, failed = 0, solved = 0;
   try {
     for (const SweepRun* run : runs) {
-      if (results.complete(run->hash)) {
+      if (const int signal = interruption_requested()) throw Interrupted(signal);
+      const SweepRunLookup found = results.look_up(run->hash);
+      if (found.result) {
         ++skipped;
       } else {
-        if (const int signal = interruption_requested()) throw Interrupted(signal);
-        const SweepRunResult r = results.run(*run, manifest.definition.keep);
+        if (!found.problem.empty()) {
+          if (terminal && !quiet) fmt::print(stderr, "\r\033[K");
+          warn_damaged(found, fmt::format("run {} is done again", run->index));
+        }
+        SweepRun job = *run;
+        job.case_toml = manifest.run_case(*run);
+        const SweepRunResult r = results.run(job, manifest.definition.keep);
         ++solved;
         if (r.status != "finished") {
           ++failed;
           if (terminal && !quiet) fmt::print(stderr, "\r\033[K");
-          fmt::print(stderr, "run {} ({}): {}: {}\n", run->index + 1, run->hash, r.status, r.message);
+          fmt::print(stderr, "run {} ({}): {}: {}\n", run->index, run->hash, r.status, r.message);
         }
       }
       ++done;
@@ -347,20 +491,18 @@ int command_sweep(const std::string& file, const SweepOptions& o, bool quiet) {
         std::fflush(stderr);
       }
     }
+    if (!quiet && terminal) fmt::print(stderr, "\n");
+    if (sharded) {
+      fmt::print("shard {}/{}: {} runs ({} solved now, {} had results)\n", i, n, runs.size(), solved, skipped);
+      return 0;
+    }
+    collect(false);
   } catch (const Interrupted& e) {
     if (!quiet && terminal) fmt::print(stderr, "\n");
     fmt::print(stderr, "sweep stopped by signal {}: {} of {} runs have results; the same command finishes the rest\n",
                e.signal(), done, runs.size());
     return 128 + e.signal();
   }
-  if (!quiet && terminal) fmt::print(stderr, "\n");
-  if (sharded) {
-    fmt::print("shard {}/{}: {} runs ({} solved now, {} had results)\n", i, n, runs.size(), solved, skipped);
-    return 0;
-  }
-  const SweepTally t = results.collect(manifest);
-  fmt::print("{} runs: {} finished, {} not converged, {} failed\ntable: {}\n", t.runs, t.finished, t.not_converged,
-             t.failed, results.table_path().string());
   return 0;
 }
 
@@ -412,8 +554,13 @@ int main(int argc, char** argv) {
 
   std::optional<int> plot_step;
   CLI::App* plot = app.add_subcommand("plot", "write the figures of a run into DIR/figures (PNG and SVG)");
-  plot->add_option("dir", file, "the run's output folder")->required();
+  std::string plot_data, plot_size;
+  plot->add_option("dir", file, "the run's output folder, or a sweep's (H, E_r, pile-up against the swept keys)")
+      ->required();
   plot->add_option("--step", plot_step, "the increment to show (default: the deepest of the load path)");
+  plot->add_option("--data", plot_data, "a measured load-depth CSV to overlay on the run's curve (as analyze reads it)");
+  plot->add_option("--size", plot_size, "slide (16:9, the default) or column (a journal column)")
+      ->check(CLI::IsMember({"slide", "column"}));
 
   MeasuredCurveOptions analyze_options;
   std::string analysis_out;
@@ -456,14 +603,14 @@ int main(int argc, char** argv) {
   fit->add_flag("--single-level", fit_options.single_level,
                 "fit on the cases' own meshes throughout (no coarse phase on half the contact nodes)");
   fit->add_flag("--no-plot", no_plot, "write no figure");
-  fit->add_flag("--quiet,-q", quiet, "no progress line");
+  fit->add_flag("--quiet,-q", quiet, "no progress line and no notes: the result, warnings and errors only");
 
   SweepOptions sweep_options;
   CLI::App* sweep = app.add_subcommand(
       "sweep", "a parameter sweep: every run of SWEEP.toml (or one shard of them, or a Slurm job array), each result "
                "kept under its case's hash; the table OUT/results.csv");
   sweep->add_option("sweep", file, "sweep file (TOML: [sweep] base, out, design; [set]; [vary])")->required();
-  CLI::Option* shard_option = sweep->add_option("--shard", sweep_options.shard, "run only shard i of N (i/N): runs i, i+N, ...");
+  CLI::Option* shard_option = sweep->add_option("--shard", sweep_options.shard, "run only shard i of N (i/N): the runs whose index (from 0) is i-1 mod N");
   CLI::Option* slurm_option = sweep->add_flag("--slurm", sweep_options.slurm, "write OUT/sweep.sbatch, a job array of shards");
   sweep->add_option("--shards", sweep_options.shards,
                     "--slurm: the number of array tasks (default: runs, at most 100; Slurm's MaxArraySize is 1001 by default)")
@@ -524,7 +671,7 @@ int main(int argc, char** argv) {
       if (command->parsed() && command->get_option("--out")->count() > 0 && out.empty())
         throw InputError("--out", "--out", "must name a folder (it is empty)");
     if (keys->parsed()) return command_keys(markdown);
-    if (plot->parsed()) return command_plot(file, plot_step);
+    if (plot->parsed()) return command_plot(file, plot_step, plot_data, plot_size);
     if (analyze->parsed()) return command_analyze(file, overrides, analyze_options, analysis_out, analysis_plot);
     if (fit->parsed()) return command_fit(fit_options, quiet, !no_plot);
     if (run->parsed()) return command_run(file, overrides, out, quiet);

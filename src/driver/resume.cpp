@@ -38,6 +38,12 @@ ResumedRun resume_from(const Checkpoint& c, const std::string& source, const std
   run.load_case = parse_load_case(c.load_case_toml, source, overrides);
   if (const std::string key = first_physics_difference(stored, run.load_case); !key.empty())
     throw InputError(source, key, "cannot change when resuming: the checkpointed history depends on it");
+  // The tolerance the increments before were converged to: case.toml records one for the run.
+  if (run.load_case.solver.tolerance != stored.solver.tolerance)
+    throw InputError(source, "solver.tolerance",
+                     fmt::format("cannot change when resuming: the checkpointed increments were converged to {:g} and "
+                                 "the run's case.toml records one tolerance; run the case again with the new one",
+                                 stored.solver.tolerance));
 
   // The new load path must pass through the history already computed.
   const std::vector<double> before = plan_increments(stored.load), after = plan_increments(run.load_case.load);

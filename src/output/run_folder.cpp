@@ -57,15 +57,27 @@ void inspect_output_dir(const fs::path& dir, const std::string& source) {
     if (!fs::is_directory(status)) fail(source, fmt::format("\"{}\" exists and is not a folder", dir.string()));
     if (::access(dir.c_str(), W_OK | X_OK) != 0)
       fail(source, fmt::format("cannot write in \"{}\": {}", dir.string(), std::strerror(errno)));
-    for (const char* name : run_files) {
-      const fs::path p = dir / name;
-      if (fs::exists(p, ec) && !fs::is_regular_file(p, ec))
+    // Everything a run replaces or writes, checked before anything is locked, removed or solved:
+    // a file it cannot replace (immutable, read-only) or a folder where it writes a file would
+    // otherwise stop it at the first write, after the earlier run's files were gone.
+    const auto replaceable = [&](const fs::path& p) {
+      if (!fs::exists(fs::symlink_status(p, ec))) return;
+      if (!fs::is_regular_file(fs::symlink_status(p, ec)))
         fail(source, fmt::format("\"{}\" is in the way: a run writes a file there", p.string()));
-    }
+      if (::access(p.c_str(), W_OK) != 0)
+        fail(source, fmt::format("cannot replace \"{}\": {}", p.string(), std::strerror(errno)));
+    };
+    replaceable(dir / lock_name);
+    for (const char* name : run_files) replaceable(dir / name);
     for (const char* name : run_folders) {
       const fs::path p = dir / name;
-      if (fs::exists(p, ec) && !fs::is_directory(p, ec))
+      if (!fs::exists(p, ec)) continue;
+      if (!fs::is_directory(p, ec))
         fail(source, fmt::format("\"{}\" is in the way: a run writes a folder there", p.string()));
+      if (::access(p.c_str(), W_OK | X_OK) != 0)
+        fail(source, fmt::format("cannot write in \"{}\": {}", p.string(), std::strerror(errno)));
+      for (const auto& entry : fs::directory_iterator(p, ec))
+        if (is_run_file(entry.path(), name)) replaceable(entry.path());
     }
     return;
   }
@@ -124,6 +136,13 @@ RunFolder::RunFolder(fs::path dir, std::string source) : dir_(std::move(dir)), s
 
 RunFolder::~RunFolder() {
   if (lock_fd_ < 0) return;
+  if (!created_ && !written_) {
+    // Refused before any run file was written: the folder is left as it was found.
+    std::error_code ec;
+    fs::remove(dir_ / lock_name, ec);
+    ::close(lock_fd_);
+    return;
+  }
   if (created_ && !written_) {
     // Nothing of a run was written: leave no trace of the attempt (bad input writes nothing).
     std::error_code ec;

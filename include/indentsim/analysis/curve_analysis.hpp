@@ -43,6 +43,10 @@ struct CurveAnalysis {
   std::vector<AnalyzedBranch> branches;
 };
 
+/// Warnings for branches whose hardness or modulus no solid has (H outside 1e5-1e12 Pa, E_r
+/// outside 1e3-2e12 Pa): a depth in nm declared as m, a force in mN as N, give H off by 1e3-1e18.
+std::vector<std::string> implausible_results(const CurveAnalysis& analysis);
+
 /// True when `path` is a run's folder, or the curve.csv in one (beside its case.toml).
 bool is_run_output(const std::filesystem::path& path);
 
