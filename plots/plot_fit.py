@@ -1,54 +1,73 @@
 #!/usr/bin/env python3
 """The figure of `indentsim fit`: DIR/fit.png (and .svg) from DIR/fit.json and DIR/fit_curves.csv.
 
-Left: every data set with the fitted model (forces in mN or mN/mm, depths in um).  Middle: the
-residuals.  Right: the 1- and 2-standard-error confidence ellipses of the two most correlated
-free parameters (linearised, from fit.json's covariance); with one free parameter, its interval.
+    plot_fit.py DIR [--size slide|column]
+
+Per kind of data (force-depth curves, imprint profiles): the data as measured (markers) with the
+fitted model through the same depths (line), and below it the residuals model - data in a unit of
+their own scale.  Right: the 1- and 2-standard-error confidence ellipses of the two most
+correlated free parameters (linearised, from fit.json's covariance), the parameters' values with
+their standard errors beside; with one free parameter, its interval.  Units follow the data's
+scale (indentsim_plotting: nm/µm/mm, µN/mN/N or per unit thickness mN/m ... MN/m in plane strain,
+MPa/GPa for stresses), the style is plots/indentsim.mplstyle.
 """
+import argparse
 import csv
 import json
 import math
+import pathlib
 import sys
-from pathlib import Path
 
-import matplotlib
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+import indentsim_plotting as ip  # noqa: E402
 
-matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+COLOURS = [ip.LOADING, ip.UNLOADING, ip.RELOADING, ip.PURPLE, ip.SKY, ip.THEORY, ip.BLACK]
 
 
-def main(folder):
-    folder = Path(folder)
-    fit = json.loads((folder / "fit.json").read_text())
-    rows = list(csv.DictReader(open(folder / "fit_curves.csv")))
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4.5))
-    sets = sorted({int(r["data_set"]) for r in rows})
-    for s in sets:
-        mine = [r for r in rows if int(r["data_set"]) == s]
-        kind = mine[0]["kind"]
-        x = [float(r["x"]) * 1e6 for r in mine]
-        scale = 1e3 if kind == "curve" else 1e6
-        data = [float(r["data"]) * scale for r in mine]
-        model = [float(r["model"]) * scale for r in mine]
-        resid = [float(r["residual"]) * scale for r in mine]
-        label = Path(fit["data"][s - 1]["file"]).name
-        unit = "mN" if kind == "curve" else "um"
-        axes[0].plot(x, data, "o", ms=3, label=f"{label} (data, {unit})")
-        axes[0].plot(x, model, "-", label=f"{label} (model)")
-        axes[1].plot(x, resid, "o-", ms=3, label=f"{label} ({unit})")
-    axes[0].set_xlabel("depth alpha or radius r [um]")
-    axes[0].set_ylabel("P [mN] (N/m x 1e3 in plane strain) or imprint depth [um]")
-    axes[0].legend(fontsize=7)
-    axes[0].set_title("data and fitted model")
-    axes[1].axhline(0.0, color="k", lw=0.5)
-    axes[1].set_xlabel("depth alpha or radius r [um]")
-    axes[1].set_ylabel("model - data")
-    axes[1].legend(fontsize=7)
-    axes[1].set_title(f"residuals: rms {100 * fit['rms_residual']['relative']:.3g}% (relative)")
+def data_units(kind, rows, axisymmetric):
+    """(x label, x unit, y label, y unit, residual unit) of one kind of data set."""
+    x = max(abs(float(r["x"])) for r in rows)
+    y = max(abs(float(r["data"])) for r in rows)
+    e = max(abs(float(r["residual"])) for r in rows) or y
+    if kind == "curve":
+        xu, yu = ip.length_unit(x), ip.force_unit(y, axisymmetric)
+        ru = ip.force_unit(e, axisymmetric)
+        return (f"indentation depth $h$ [{xu.name}]", xu,
+                f"load $P$ [{yu.name}]" if axisymmetric else f"load $P$ per unit thickness [{yu.name}]", yu, ru)
+    xu, yu = ip.length_unit(x), ip.length_unit(y)
+    return (f"radial coordinate $r$ [{xu.name}]", xu, f"imprint depth [{yu.name}]", yu, ip.length_unit(e))
 
+
+def ellipse_points(centre, cov, k, n=200):
+    """The k-standard-error ellipse of a 2x2 covariance: centre + k L (cos u, sin u) with L L^T = cov
+    (Cholesky: exact however different the two parameters' scales; an eigen-decomposition of the
+    raw covariance loses the small axis to rounding when they differ by 1e8 or more)."""
+    a, b, d = cov
+    l11 = math.sqrt(max(a, 0.0))
+    l21 = b / l11 if l11 > 0 else 0.0
+    l22 = math.sqrt(max(d - l21 * l21, 0.0))
+    u = np.linspace(0, 2 * math.pi, n)
+    return centre[0] + k * l11 * np.cos(u), centre[1] + k * (l21 * np.cos(u) + l22 * np.sin(u))
+
+
+def parameter_text(key, p):
+    """ "σ_y = 412 ± 5 MPa", "e0 = (4.92 ± 0.04)×10⁻³" """
+    value, se = p["value"], p.get("std_error")
+    unit = ip.key_unit(key, abs(value) or 1.0)
+    text = ip.number(value / unit.scale, 4) + (f" ± {ip.number(se / unit.scale, 2)}" if se else "")
+    if unit.name.startswith("10$"):
+        return f"{ip.key_symbol(key)} = ({text})×{unit.name}" if se else f"{ip.key_symbol(key)} = {text}×{unit.name}"
+    return f"{ip.key_symbol(key)} = {text}{'' if unit.name in ('', '°') else ' '}{unit.name}"
+
+
+def plot_confidence(ax, fit, size):
     keys = fit["free"]
-    ax = axes[2]
     cov = fit["covariance"]
+    params = fit["parameters"]
+    lines = [parameter_text(k, params[k]) for k in keys]
     if len(keys) >= 2:
         corr = fit["correlation"]
         best, pair = -1.0, (0, 1)
@@ -58,48 +77,114 @@ def main(folder):
                 if c is not None and abs(c) > best:
                     best, pair = abs(c), (i, j)
         i, j = pair
-        vi, vj = fit["parameters"][keys[i]]["value"], fit["parameters"][keys[j]]["value"]
+        xi, xu = ip.key_axis(keys[i], [params[keys[i]]["value"]])
+        yi, yu = ip.key_axis(keys[j], [params[keys[j]]["value"]])
+        centre = (params[keys[i]]["value"], params[keys[j]]["value"])
         a, b, d = cov[i][i], cov[i][j], cov[j][j]
         if None not in (a, b, d):
-            # Eigen-decomposition of the 2x2 covariance: the ellipse's axes.
-            tr, det = a + d, a * d - b * b
-            l1 = tr / 2 + math.sqrt(max(tr * tr / 4 - det, 0.0))
-            l2 = tr / 2 - math.sqrt(max(tr * tr / 4 - det, 0.0))
-            angle = 0.5 * math.atan2(2 * b, a - d)
-            for k, style in ((1, "-"), (2, "--")):
-                xs, ys = [], []
-                for t in range(101):
-                    u = 2 * math.pi * t / 100
-                    p = k * math.sqrt(max(l1, 0.0)) * math.cos(u)
-                    q = k * math.sqrt(max(l2, 0.0)) * math.sin(u)
-                    xs.append(vi + p * math.cos(angle) - q * math.sin(angle))
-                    ys.append(vj + p * math.sin(angle) + q * math.cos(angle))
-                ax.plot(xs, ys, style, label=f"{k} standard error(s)")
-        ax.plot([vi], [vj], "k+", ms=10, label="fit")
-        ax.set_xlabel(keys[i])
-        ax.set_ylabel(keys[j])
-        ax.legend(fontsize=7)
-        ax.set_title(f"correlation {corr[i][j]:.3f}" if corr[i][j] is not None else "correlation undetermined")
+            for k, style, colour in ((1, "-", ip.LOADING), (2, "--", ip.UNLOADING)):
+                xs, ys = ellipse_points(centre, (a, b, d), k)
+                ax.plot(xu(xs), yu(ys), style, color=colour)
+                right = int(np.argmax(xs))  # named where the ellipse reaches furthest right
+                ax.annotate(f" {k} s.e.", (xu(xs[right]), yu(ys[right])), ha="left", va="center", color=colour,
+                            fontsize=plt.rcParams["legend.fontsize"])
+            # The whole ellipse in view with a margin, whatever the parameters' scales.
+            xs, ys = ellipse_points(centre, (a, b, d), 2)
+            for setter, v, unit, room in ((ax.set_xlim, xs, xu, 0.35), (ax.set_ylim, ys, yu, 0.12)):
+                lo, hi = unit(v.min()), unit(v.max())
+                pad = (hi - lo) or abs(lo) * 0.1 or 1.0
+                setter(lo - 0.12 * pad, hi + room * pad)
+        ax.plot(xu(centre[0]), yu(centre[1]), "+", color=ip.BLACK, ms=plt.rcParams["lines.markersize"] * 2.5, mew=2)
+        ax.set_xlabel(xi)
+        ax.set_ylabel(yi)
+        rho = corr[i][j]
+        ax.set_title("confidence region\n" + (f"ρ = {rho:.3f}".replace("-", "−") if rho is not None
+                                                else "ρ undetermined"))
+        if rho is not None and abs(rho) > 0.999:
+            lines.append(f"only a combination of {ip.key_symbol(keys[i])} and {ip.key_symbol(keys[j])} is determined "
+                         f"(ρ = {rho:.4f})")
+        ax.ticklabel_format(useOffset=False)
     else:
-        v = fit["parameters"][keys[0]]
-        se = v["std_error"] or 0.0
-        ax.errorbar([0], [v["value"]], yerr=[2 * se], fmt="o", capsize=6)
+        key = keys[0]
+        p = params[key]
+        label, unit = ip.key_axis(key, [p["value"]])
+        se = p.get("std_error") or 0.0
+        ax.errorbar([0], [unit(p["value"])], yerr=[unit(2 * se)], fmt="o", color=ip.LOADING, capsize=6)
         ax.set_xticks([])
-        ax.set_ylabel(keys[0])
-        ax.set_title("value +- 2 standard errors")
+        ax.set_xlim(-1, 1)
+        ax.set_ylabel(label)
+        ax.set_title("value ± 2 standard errors")
+    return lines
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("folder", type=pathlib.Path, help="the folder of indentsim fit (fit.json, fit_curves.csv)")
+    parser.add_argument("--size", choices=ip.SIZES, default="slide",
+                        help="slide (16:9, default) or column (a journal column, 3.5 in wide)")
+    parser.add_argument("--dpi", type=float, help="the PNGs' resolution (default: slide 192, i.e. 1920 x 1080 px; "
+                                                  "column 300)")
+    args = parser.parse_args()
+    ip.use_style(args.size, args.dpi)
+    folder = args.folder
+    fit = json.loads((folder / "fit.json").read_text())
+    with open(folder / "fit_curves.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    kinds = [k for k in ("curve", "imprint") if any(r["kind"] == k for r in rows)]
+    n = len(kinds)
+    slide = args.size == "slide"
+    if slide:
+        fig = plt.figure(figsize=(ip.SLIDE_WIDTH, ip.SLIDE_WIDTH * 9 / 16))
+        grid = fig.add_gridspec(2, n + 1, height_ratios=[2.6, 1],
+                                width_ratios=[1.25] * n + [1 if len(fit["free"]) >= 2 else 0.45])
+        panels = [(fig.add_subplot(grid[0, c]), None) for c in range(n)]
+        panels = [(top, fig.add_subplot(grid[1, c], sharex=top)) for c, (top, _) in enumerate(panels)]
+        confidence = fig.add_subplot(grid[:, n])
+    else:
+        fig = plt.figure(figsize=(ip.COLUMN_WIDTH, 3.4 * n + 2.8))
+        grid = fig.add_gridspec(2 * n + 1, 1, height_ratios=[2.4, 1] * n + [2.8])
+        panels = []
+        for c in range(n):
+            top = fig.add_subplot(grid[2 * c, 0])
+            panels.append((top, fig.add_subplot(grid[2 * c + 1, 0], sharex=top)))
+        confidence = fig.add_subplot(grid[-1, 0])
+    for kind, (ax, res) in zip(kinds, panels):
+        mine = [r for r in rows if r["kind"] == kind]
+        sets = sorted({int(r["data_set"]) for r in mine})
+        axisymmetric = all(fit["data"][s - 1].get("rms_residual_unit", "N") != "N/m" for s in sets)
+        x_label, xu, y_label, yu, ru = data_units(kind, mine, axisymmetric)
+        for n_set, s in enumerate(sets):
+            part = [r for r in mine if int(r["data_set"]) == s]
+            colour = COLOURS[n_set % len(COLOURS)]
+            name = pathlib.Path(fit["data"][s - 1]["file"]).name
+            x = xu(np.array([float(r["x"]) for r in part]))
+            ax.plot(x, yu(np.array([float(r["data"]) for r in part])), "o", color=colour, mfc="none",
+                    label=f"data: {name}")
+            ax.plot(x, yu(np.array([float(r["model"]) for r in part])), "-", color=colour,
+                    label="model" if len(sets) == 1 else f"model: {name}")
+            res.plot(x, ru(np.array([float(r["residual"]) for r in part])), "o", color=colour)
+        ax.set_ylabel(y_label)
+        ax.set_title("force–depth curve" if kind == "curve" else "residual imprint")
+        ax.legend(loc="lower right" if kind == "curve" else "best")
+        ax.tick_params(labelbottom=False)
+        res.axhline(0.0, color="#555555", lw=0.8)
+        res.set_xlabel(x_label)
+        res.set_ylabel(f"model − data\n[{ru.name}]")
+    values = plot_confidence(confidence, fit, args.size)
     verdict = "identifiable" if fit["identifiable"] else "NOT identifiable"
     runs = f"{fit['forward_runs']} forward runs"
     if fit.get("coarse_runs", 0):
         runs += f" (+{fit['coarse_runs']} coarse)"
-    fig.suptitle(f"indentsim fit: {runs}, {fit['wall_s']:.1f} s; condition number "
-                 f"{fit['condition_number']:.3g} ({verdict})")
-    fig.tight_layout()
-    for ext in ("png", "svg"):
-        fig.savefig(folder / f"fit.{ext}", dpi=120)
+    quality = fit.get("quality")
+    first = (f"indentsim fit of {', '.join(ip.key_symbol(k) for k in fit['free'])}: relative rms residual "
+             f"{100 * fit['rms_residual']['relative']:.3g}%, condition number {fit['condition_number']:.3g} "
+             f"({verdict})" + (f", fit {quality}" if quality else ""))
+    ip.run_title(fig, first, "; ".join(values) + f"; {runs}, {fit['wall_s']:.1f} s")
+    for suffix in ("png", "svg"):
+        fig.savefig(folder / f"fit.{suffix}")
+    plt.close(fig)
     print(f"figure: {folder / 'fit.png'}")
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 2:
-        sys.exit("usage: plot_fit.py DIR (the folder of indentsim fit)")
-    main(sys.argv[1])
+    main()

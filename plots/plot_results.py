@@ -1,29 +1,40 @@
 #!/usr/bin/env python3
-"""Figures of an indentsim run.
+"""Figures of an indentsim run, of its Oliver-Pharr analysis, and of a sweep.
 
-    indentsim plot OUTDIR [--step N]          (or: python3 plots/plot_results.py OUTDIR [--step N])
+    indentsim plot DIR [--step N] [--data CURVE.csv] [--size slide|column]
+    python3 plots/plot_results.py DIR [--step N] [--data CURVE.csv [--depth-unit nm --force-unit mN ...]]
+                                      [--size slide|column]
 
-Reads OUTDIR/case.toml, curve.csv, summary.json, profiles.csv and the VTU of one increment from
-fields.pvd -- by default the deepest state of the load path, which indentsim always writes (a
-history that ends unloaded has nothing to show at its end) -- and writes PNG and SVG files into
-OUTDIR/figures/:
-  curve          the P-alpha curve (P in kN/m in plane strain, in N in axisymmetry), loading and
-                 unloading branches in their own colours, the peak, the unloading stiffness S as a
-                 tangent and the residual depth h_f marked (elastic runs: also the P-a relation
-                 against Hertz line contact, Hertz for a sphere, Sneddon for a cone)
-  pressure       the contact pressure from the layer forces against that theory for the same force
-  profiles       sigma_N and sigma_T along the surface and the chosen depths (the paper's Fig. 5):
-                 lines from the local stiffness rows, markers from Gauss-point stresses
-  plastic_zone   strain intensity e_u / e0 on the deformed mesh, the outline of the yielded region
-                 and the punch where it stands (the paper's Fig. 6); the window follows the zone
-and, when `indentsim analyze OUTDIR` has written OUTDIR/analysis.json, analysis.png beside it.
+A run's folder (case.toml, curve.csv, summary.json, profiles.csv and the VTU of one increment from
+fields.pvd -- by default the deepest state of the load path, which indentsim always writes): PNG
+and SVG files in DIR/figures/:
+  curve          the load-depth curve P-h as computed: loading, unloading and reloading in their
+                 colours with a marker at every computed increment, lines only between increments
+                 that both touch, the rows after separation as grey crosses, the peak, the
+                 unloading stiffness S and the residual depth h_f (elastic runs: also P against the
+                 contact radius a, with Hertz or Sneddon); with --data, a measured curve over it
+  pressure       the contact pressure p(r) (or p(x)) against that theory for the same force, the
+                 contact radius a marked
+  profiles       the paper's layer view (Yazici 2023, Fig. 5): sigma_N (paper) = sigma_zz and
+                 sigma_T (paper) = sigma_rz along the surface and the chosen depths
+  plastic_zone   the strain intensity e_u/e0 on the deformed mesh (both halves), its colour scale
+                 logarithmic where the tip dominates, the yield outline e_u = e0 as a contour (J2:
+                 also where the material has yielded) and the indenter where it stands
+and, when `indentsim analyze DIR` has written DIR/analysis.json, analysis.png beside it.  Units are
+chosen once per run from its scale (indentsim_plotting.RunUnits) and shared by every figure.
 
-    indentsim analyze CURVE --plot            (or: python3 plots/plot_results.py --analysis FILE.json)
+A sweep's folder (results.csv, and manifest.json, `indentsim sweep`): DIR/figures/sweep.png and
+.svg: hardness H, reduced modulus E_r and the pile-up ratio A_true/A_c against the swept
+parameter (one line per value of a second swept parameter).
 
-draws an analysis.json: each unloading branch with its power-law fit, S as the tangent at h_max,
-h_f, h_c and h_max marked, and a table of the Oliver-Pharr numbers (with the true contact's for a
-run): FILE.png and FILE.svg beside it.
-Needs Debian's python3-matplotlib (installed by scripts/install-deps.sh).
+    indentsim analyze CURVE --plot        (or: python3 plots/plot_results.py --analysis FILE.json)
+
+draws an analysis.json: the whole curve, each unloading branch with its power-law fit, S as the
+tangent at h_max, h_f, h_c and h_max marked, and a table of the Oliver-Pharr numbers (with the true
+contact's for a run): FILE.png and FILE.svg beside it.
+
+--size slide (default: 16:9, 1920 x 1080 px) or column (a journal column, 3.5 in wide, 300 dpi);
+the style is plots/indentsim.mplstyle.  Needs Debian's python3-matplotlib (scripts/install-deps.sh).
 """
 import argparse
 import base64
@@ -32,45 +43,36 @@ import json
 import math
 import pathlib
 import sys
+import textwrap
 import tomllib
 import xml.etree.ElementTree as ET
 
-import matplotlib
-import numpy as np
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+import indentsim_plotting as ip  # noqa: E402
 
-matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib import patheffects  # noqa: E402
 from matplotlib.collections import PolyCollection  # noqa: E402
+from matplotlib.colors import LogNorm, Normalize  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
 
-
-def read_csv(path):
-    with open(path, newline="") as f:
-        return list(csv.DictReader(f))
-
-
-def save(fig, outdir, name):
-    fig.tight_layout()
-    for suffix in ("png", "svg"):
-        fig.savefig(outdir / f"{name}.{suffix}", dpi=150)
-    plt.close(fig)
-    print(f"wrote {outdir / name}.png")
+read_csv = ip.read_csv
 
 
 class Scene:
-    """What the figures need of the scene: the unit of P and the theory of the punch's shape.
+    """What the figures need of the scene: the punch's shape and the theory for it.
 
-    Plane strain: P per unit thickness [kN/m], Hertz line contact for the cylinder.  Axisymmetry:
-    P in newtons, Hertz for the sphere, Sneddon for the cone and the flat punch.  Other shapes
-    have no closed form: their figures show indentsim alone."""
+    Plane strain: Hertz line contact for the cylinder.  Axisymmetry: Hertz for the sphere, Sneddon
+    for the cone.  Other shapes have no closed form: their figures show indentsim alone."""
 
     def __init__(self, case):
-        self.axisymmetric = case["geometry"].get("kind", "plane_strain") == "axisymmetric"
+        self.axisymmetric = ip.is_axisymmetric(case)
         self.punch = case["punch"]
         self.shape = self.punch.get("shape", "sphere")
         self.e_star = case["material"]["E"] / (1 - case["material"]["nu"] ** 2)
-        self.force_scale, self.force_unit = (1.0, "N") if self.axisymmetric else (1e3, "kN/m")
-        self.stiffness_unit = "N/m" if self.axisymmetric else "N/m per m"
-        self.width_name = "contact radius a" if self.axisymmetric else "contact half-width a"
+        self.r = "r" if self.axisymmetric else "x"
+        self.width_name = "contact radius $a$" if self.axisymmetric else "contact half-width $a$"
         cot = 1 / math.tan(math.radians(self.punch.get("half_angle", 45.0)))
         sharp_cone = self.shape == "cone" and self.punch.get("tip_radius", 0.0) == 0.0
         r = self.punch.get("radius", 0.0)
@@ -87,11 +89,16 @@ class Scene:
             self.theory = ("Sneddon", lambda a: math.pi * a * a * self.e_star * cot / 2,
                            lambda p: math.sqrt(2 * p / (math.pi * self.e_star * cot)),
                            lambda x, a, p: self.e_star * cot / 2 * math.acosh(a / x) if 0 < x < a else 0.0)
+        elif self.shape == "flat" and self.axisymmetric:
+            # Sneddon's flat punch: the contact is the face, a = R; p = P / (2 pi a sqrt(a^2 - r^2)).
+            self.theory = ("Sneddon", None, lambda p: r,
+                           lambda x, a, p: p / (2 * math.pi * a * math.sqrt(a * a - x * x)) if x < a else 0.0)
         else:
             self.theory = None
 
-    def force(self, value):
-        return float(value) / self.force_scale
+    def contact_area(self, a):
+        """The projected contact area (axisymmetric) or width 2a (plane strain, per unit thickness)."""
+        return math.pi * a * a if self.axisymmetric else 2 * a
 
     def punch_height(self, x):
         """g(x) of the punch, or None beyond its rim."""
@@ -113,129 +120,172 @@ class Scene:
         return None
 
 
-def case_name(case_text):
-    """The load case's file name, from case.toml's first comment line "(from PATH)"."""
-    first = case_text.splitlines()[0] if case_text else ""
-    if "(from " in first:
-        return pathlib.Path(first.split("(from ", 1)[1].split(")", 1)[0]).stem
-    return "run"
+def column_of(rows, name, default=0.0):
+    return np.array([float(r[name]) if r.get(name) not in (None, "") else default for r in rows])
 
 
-def branches(curve):
-    """Consecutive runs of rows going the same way: [(loading?, rows)], each run sharing its first row."""
-    out = []
-    for k in range(1, len(curve)):
-        loading = float(curve[k]["alpha"]) >= float(curve[k - 1]["alpha"])
-        if not out or out[-1][0] != loading:
-            out.append((loading, [curve[k - 1]]))
-        out[-1][1].append(curve[k])
-    return out
+# --- curve.png ------------------------------------------------------------------------------------
 
-
-def plot_curve(case, name, curve, summary, outdir):
+def plot_curve(case, summary, curve, units, size, outdir, measured=None):
     scene = Scene(case)
-    elastic = case["material"]["model"] == "elastic" and scene.theory is not None
-    fig, axes = plt.subplots(1, 2 if elastic else 1, figsize=(11 if elastic else 6, 4.4), squeeze=False)
-    ax = axes[0][0]
-    drawn = set()
-    style = {"loading": ("tab:blue", "-", 2), "unloading": ("tab:orange", "-", 3), "reloading": ("tab:green", "--", 4)}
-    for k, (loading, rows) in enumerate(branches(curve)):
-        label = "unloading" if not loading else ("loading" if k == 0 else "reloading")
-        color, line, order = style[label]
-        ax.plot([float(r["alpha"]) * 1e6 for r in rows], [scene.force(r["P"]) for r in rows], "o", ls=line, ms=3,
-                color=color, zorder=order, label=None if label in drawn else label)
-        drawn.add(label)
-    peak = max(curve, key=lambda r: float(r["P"]))
-    ax.plot(float(peak["alpha"]) * 1e6, scene.force(peak["P"]), "k*", ms=10, label="peak")
-    # The run's own discretization error (mesh.error_estimate): a band of P +- the estimate, and
-    # the figure at the peak in the legend (a band of 0.1% is thinner than the line).
-    with_error = [r for r in curve if r.get("P_error_estimate")]
-    if with_error:
-        alphas = [float(r["alpha"]) * 1e6 for r in with_error]
-        ax.fill_between(alphas, [scene.force(float(r["P"]) - float(r["P_error_estimate"])) for r in with_error],
-                        [scene.force(float(r["P"]) + float(r["P_error_estimate"])) for r in with_error],
-                        color="tab:gray", alpha=0.35, lw=0, zorder=1)
-        if peak.get("P_error_estimate") and float(peak["P"]) > 0:
-            relative = float(peak["P_error_estimate"]) / float(peak["P"])
-            ax.fill_between([], [], [], color="tab:gray", alpha=0.35, lw=0,
-                            label=f"discretization error ± {100 * relative:.2g}% at the peak")
-    for u in summary.get("unloading", []):
+    elastic = case["material"]["model"] == "elastic" and scene.theory is not None and scene.theory[1] is not None
+    depth, force = column_of(curve, "alpha"), column_of(curve, "P")
+    nodes = column_of(curve, "contact_nodes", 1.0) if "contact_nodes" in curve[0] else None
+    # The legend's entries: the kinds of branch, separated rows, the peak, the error band, S, h_f.
+    unloading = summary.get("unloading") or []
+    entries = len(set(ip.branch_kinds(depth))) + bool(ip.separated_rows(force, nodes).any()) + 1 + \
+        bool(curve[0].get("P_error_estimate")) + bool(unloading) + any(u.get("separated") for u in unloading) + \
+        (measured is not None)
+    strip = None
+    if size == "column" and not elastic:
+        fig, axes, strip = ip.figure(size, legend_row=ip.legend_height(entries, size))
+    elif elastic:  # two panels: the curve's legend in a strip below them (three columns on a slide)
+        fig, axes, strip = ip.figure(size, columns=2, legend_row=ip.legend_height(
+            entries, size, 3 if size == "slide" else 1))
+    else:
+        fig, axes = ip.figure(size)
+    ax = axes[0]
+    if measured is not None:
+        h_m, p_m, name = measured
+        ax.plot(units.depth(h_m), units.force(p_m), "-", color=ip.MEASURED, lw=plt.rcParams["lines.linewidth"] * 0.7,
+                alpha=0.8, zorder=2, label=f"measured: {name}")
+    # The run's own discretization error (mesh.error_estimate): a band of P +- the estimate along
+    # the curve, and the figure at the peak in the legend (a band of 0.1% is thinner than the line).
+    error = column_of(curve, "P_error_estimate") if curve[0].get("P_error_estimate") not in (None, "") else None
+    ip.draw_load_depth(ax, depth, force, nodes, units, error=error)
+    k = int(np.argmax(force))
+    ax.plot(units.depth(depth[k]), units.force(force[k]), "*", color=ip.BLACK,
+            ms=plt.rcParams["lines.markersize"] * 2.4, zorder=5,
+            label=f"$P_\\mathrm{{max}}$ = {units.force.text(force[k])} at $h_\\mathrm{{max}}$ = "
+                  f"{units.depth.text(depth[k])}")
+    if error is not None and error[k] > 0 and force[k] > 0:
+        ax.fill_between([], [], [], color="#999999", alpha=0.3, lw=0,
+                        label=f"discretization error ± {100 * error[k] / force[k]:.2g}% at the peak")
+    for n, u in enumerate(summary.get("unloading", [])):
         h, p, stiffness = u["depth"], u["force"], u["stiffness"]
         if stiffness > 0:
-            h0 = h - p / stiffness  # where the tangent at the reversal meets P = 0
-            ax.plot([h0 * 1e6, h * 1e6], [0, scene.force(p)], "k--", lw=0.8,
-                    label=f"S = {stiffness:.3g} {scene.stiffness_unit}")
+            h0 = h - p / stiffness  # where the secant from the reversal meets P = 0
+            ax.plot(units.depth(np.array([h0, h])), units.force(np.array([0, p])), ":", color=ip.BLACK,
+                    lw=plt.rcParams["lines.linewidth"] * 0.7, zorder=4,
+                    label=f"$S$ = {units.stiffness.text(stiffness)} (first unloading step)" if n == 0 else None)
         if u.get("separated") and u.get("residual_depth") is not None:
-            ax.plot(u["residual_depth"] * 1e6, 0, "rv", ms=8, label=f"h_f = {u['residual_depth'] * 1e6:.3g} µm")
-    ax.set_xlabel("indentation depth α [µm]")
-    ax.set_ylabel(f"punch force P [{scene.force_unit}]")
-    ax.set_title(f"{name}: P–α ({case['material']['model']}, {scene.shape})")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
+            ax.plot(units.depth(u["residual_depth"]), 0, "v", color=ip.THEORY,
+                    ms=plt.rcParams["lines.markersize"] * 1.8, zorder=6, clip_on=False,
+                    label=f"$h_\\mathrm{{f}}$ = {units.depth.text(u['residual_depth'])}, residual depth"
+                    if n == 0 else None)
+    ax.set_xlabel(f"indentation depth $h$ [{units.depth.name}]")
+    ax.set_ylabel(units.force_axis())
+    ax.set_xlim(left=0)
+    ax.set_ylim(bottom=-0.02 * units.force(max(force.max(), 1e-300)))
+    ax.set_title("load–depth curve" + (", simulated and measured" if measured is not None else ""))
+    if elastic:
+        handles = ax.get_legend_handles_labels()[0]
+        ip.strip_legend(strip, handles, size, columns=min(len(handles), 3) if size == "slide" else 1)
+    else:
+        ip.legend(ax, size, strip=strip, loc="upper left")
     if elastic:
         theory_name, force_of_a = scene.theory[0], scene.theory[1]
-        ax = axes[0][1]
-        a_max = max(float(r["a"]) for r in curve)
-        a_line = [a_max * k / 100 for k in range(101)]
-        ax.plot([a * 1e6 for a in a_line], [force_of_a(a) / scene.force_scale for a in a_line], "-", label=theory_name)
-        ax.plot([float(r["a"]) * 1e6 for r in curve], [scene.force(r["P"]) for r in curve], "o", ms=4,
-                label="indentsim")
-        ax.set_xlabel(f"{scene.width_name} [µm]")
-        ax.set_ylabel(f"punch force P [{scene.force_unit}]")
-        ax.set_title(f"{name}: P–a against {theory_name}")
-        ax.legend()
-        ax.grid(alpha=0.3)
-    save(fig, outdir, "curve")
+        ax = axes[1]
+        a = column_of(curve, "a")
+        a_line = np.linspace(0, a.max(), 101)
+        ax.plot(units.position(a_line), units.force(np.array([force_of_a(x) for x in a_line])), "-", color=ip.THEORY,
+                label=theory_name)
+        ax.plot(units.position(a), units.force(force), "o", color=ip.LOADING, label="indentsim")
+        ax.set_xlabel(f"{scene.width_name} [{units.position.name}]")
+        ax.set_ylabel(units.force_axis())
+        ax.set_title("load against contact size")
+        ax.legend(loc="upper left")
+    ip.run_title(fig, ip.describe_run(case, summary))
+    ip.save(fig, outdir, "curve")
 
 
-def plot_pressure(case, name, row, profiles, surface_from_vtu, outdir):
+# --- pressure.png ---------------------------------------------------------------------------------
+
+def plot_pressure(case, summary, row, profiles, surface_from_vtu, units, size, outdir):
     force = float(row["P"])
     a = float(row["a"])
+    scene = Scene(case)
     if profiles:
         top = max(int(r["line"]) for r in profiles)
         surface = [(float(r["x"]), -float(r["sigmaN_layer"])) for r in profiles if int(r["line"]) == top]
-        source = "layer forces"
+        source = "indentsim: surface traction"
     else:
-        surface, source = surface_from_vtu, "nodal contact pressure"
-    scene = Scene(case)
-    fig, ax = plt.subplots(figsize=(5.5, 4.2))
-    shown = [(x, p) for x, p in surface if x <= 1.6 * max(a, 1e-300)]
-    ax.plot([x * 1e6 for x, _ in shown], [p / 1e6 for _, p in shown], "o", ms=4, label=f"indentsim ({source})")
-    if force > 0 and scene.theory is not None and case["material"]["model"] == "elastic":
+        surface, source = surface_from_vtu, "indentsim: nodal contact pressure"
+    fig, axes = ip.figure(size)
+    ax = axes[0]
+    reach = 1.6 * max(a, 1e-300)
+    shown = [(x, p) for x, p in surface if x <= reach]
+    ax.plot(units.position(np.array([x for x, _ in shown])), units.stress(np.array([p for _, p in shown])), "o-",
+            color=ip.LOADING, lw=plt.rcParams["lines.linewidth"] * 0.6, label=source, zorder=3)
+    if force > 0 and scene.theory is not None:
+        # The elastic theory for the same force; for a plastic run a reference (dashed).
+        elastic = case["material"]["model"] == "elastic"
         theory_name, _, a_of_force, pressure = scene.theory
         a_t = a_of_force(force)
-        grid = [a_t * k / 200 for k in range(1, 201)]
-        ax.plot([x * 1e6 for x in grid], [pressure(x, a_t, force) / 1e6 for x in grid], "-", label=f"{theory_name}, same P")
-    ax.set_xlabel("r [µm]" if scene.axisymmetric else "x [µm]")
-    ax.set_ylabel("contact pressure p [MPa]")
-    ax.set_title(f"{name}: contact pressure at α = {float(row['alpha']) * 1e6:.3g} µm (step {row['step']})")
-    ax.legend()
-    ax.grid(alpha=0.3)
-    save(fig, outdir, "pressure")
+        grid = np.linspace(a_t / 400, a_t * (0.98 if scene.shape == "flat" else 1.0), 400)  # flat: singular at a
+        theory = np.array([pressure(x, a_t, force) for x in grid])
+        computed = max((p for _, p in shown), default=0.0)
+        if elastic or theory.max() <= 2 * computed:  # a reference far off the plastic pressure: left out
+            ax.plot(units.position(grid), units.stress(theory), "-" if elastic else "--", color=ip.THEORY,
+                    label=f"{theory_name}, same $P$" + ("" if elastic else " (elastic, for reference)"))
+    if a > 0:
+        ax.axvline(units.position(a), color="#666666", ls=":", lw=1.2,
+                   label=f"{scene.width_name} = {units.position.text(a)}")
+    ax.set_xlim(0, units.position(reach))
+    ax.set_ylim(bottom=0)
+    ax.set_xlabel(f"{'radial coordinate $r$' if scene.axisymmetric else 'distance from the axis $x$'} "
+                  f"[{units.position.name}]")
+    ax.set_ylabel(f"contact pressure $p$ [{units.stress.name}]")
+    ax.set_title(f"contact pressure at $h$ = {units.depth.text(float(row['alpha']))} (step {row['step']}), "
+                 f"$P$ = {units.force.text(force)}")
+    ax.legend(loc="upper right" if size == "slide" else "best")
+    ip.run_title(fig, ip.describe_run(case, summary))
+    ip.save(fig, outdir, "pressure")
 
 
-def plot_profiles(name, row, profiles, outdir):
+# --- profiles.png ---------------------------------------------------------------------------------
+
+def plot_profiles(case, summary, row, profiles, units, size, outdir):
+    scene = Scene(case)
     a = float(row["a"])
+    reach = 3 * max(a, 1e-300)
     lines = sorted({int(r["line"]) for r in profiles}, reverse=True)
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
-    for line in lines:
-        rows = [r for r in profiles if int(r["line"]) == line and float(r["x"]) <= 3 * max(a, 1e-300)]
+    entries = len(lines) + 3
+    fig, axes, strip = ip.figure(size, columns=2, legend_row=ip.legend_height(entries, size, min(entries, 3)
+                                                                               if size == "slide" else 1))
+    shear = "σ$_{rz}$" if scene.axisymmetric else "σ$_{xz}$"
+    colours = [ip.LOADING, ip.UNLOADING, ip.RELOADING, ip.PURPLE, ip.SKY, ip.THEORY]
+    handles = []
+    for n, line in enumerate(lines):
+        rows = [r for r in profiles if int(r["line"]) == line and float(r["x"]) <= reach]
         depth = -float(rows[0]["y"])
-        label = "surface" if depth == 0 else f"depth {depth * 1e3:.3g} mm"
-        x = [float(r["x"]) * 1e3 for r in rows]
-        for ax, layer, nodal in ((axes[0], "sigmaN_layer", "sigma22_nodal"), (axes[1], "sigmaT_layer", "sigma12_nodal")):
-            (drawn,) = ax.plot(x, [float(r[layer]) / 1e6 for r in rows], "-", label=f"{label}: layer forces")
-            ax.plot(x, [float(r[nodal]) / 1e6 for r in rows], "o", ms=3, color=drawn.get_color(),
-                    label=f"{label}: Gauss points")
-    axes[0].set_ylabel("σ_N ≈ σ22 [MPa]")
-    axes[1].set_ylabel("σ_T ≈ σ12 [MPa]")
-    for ax, title in zip(axes, ("normal stress σ_N", "tangential stress σ_T")):
-        ax.set_xlabel("x [mm]")
-        ax.set_title(f"{name}: {title} at α = {float(row['alpha']) * 1e6:.3g} µm")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=7)
-    save(fig, outdir, "profiles")
+        c = colours[n % len(colours)]
+        handles.append(Line2D([], [], color=c,
+                              label="surface" if depth == 0 else f"$z$ = −{units.position.text(depth)}"))
+        x = units.position(column_of(rows, "x"))
+        for ax, layer, nodal in ((axes[0], "sigmaN_layer", "sigma22_nodal"),
+                                 (axes[1], "sigmaT_layer", "sigma12_nodal")):
+            ax.plot(x, units.stress(column_of(rows, layer)), "-", color=c)
+            ax.plot(x, units.stress(column_of(rows, nodal)), "o", color=c, ms=plt.rcParams["lines.markersize"] * 0.8,
+                    mfc="none")
+    handles += [Line2D([], [], color="#555555", ls="-", label="layer view (paper: layer forces / w)"),
+                Line2D([], [], color="#555555", ls="none", marker="o", mfc="none", label="Gauss points → nodes")]
+    axes[0].set_ylabel(f"σ$_{{zz}}$ [{units.stress.name}]")
+    axes[1].set_ylabel(f"{shear} [{units.stress.name}]")
+    h = units.depth.text(float(row["alpha"]))
+    titles = ("normal stress: σ$_N$ (paper) = σ$_{zz}$", f"shear stress: σ$_T$ (paper) = {shear}")
+    for ax, title in zip(axes, titles):
+        ax.set_xlabel(f"{'radial coordinate $r$' if scene.axisymmetric else '$x$'} [{units.position.name}]")
+        ax.set_title(title)
+        ax.axvline(units.position(a), color="#666666", ls=":", lw=1.2)
+    handles.append(Line2D([], [], color="#666666", ls=":", lw=1.2, label=f"$a$ = {units.position.text(a)}"))
+    ip.strip_legend(strip, handles, size, columns=min(len(handles), 3) if size == "slide" else 1)
+    ip.run_title(fig, f"the paper's layer view (Yazıcı 2023, Fig. 5) at $h$ = {h} (step {row['step']})",
+                 ip.describe_run(case, summary))
+    ip.save(fig, outdir, "profiles")
 
+
+# --- plastic_zone.png -----------------------------------------------------------------------------
 
 def vtu_of_step(outdir, step):
     collection = ET.parse(outdir / "fields.pvd").getroot().find("Collection")
@@ -255,8 +305,8 @@ def decode_data_array(d):
     if d.get("format") == "binary":
         raw = base64.b64decode("".join(d.text.split()))
         size = int.from_bytes(raw[:8], "little")
-        return np.frombuffer(raw[8:8 + size], dtype=VTK_TYPES[d.get("type")]).astype(float).tolist()
-    return [float(v) for v in d.text.split()]
+        return np.frombuffer(raw[8:8 + size], dtype=VTK_TYPES[d.get("type")]).astype(float)
+    return np.array([float(v) for v in d.text.split()])
 
 
 def read_vtu(path):
@@ -268,181 +318,576 @@ def read_vtu(path):
                 return decode_data_array(d)
         raise KeyError(name)
 
-    points = array("Points", "coordinates")
-    u = array("PointData", "displacement")
-    xy = [(points[3 * k], points[3 * k + 1]) for k in range(len(points) // 3)]
-    deformed = [(x + u[3 * k], y + u[3 * k + 1]) for k, (x, y) in enumerate(xy)]
-    connectivity = [int(v) for v in array("Cells", "connectivity")]
-    quads = [connectivity[4 * e:4 * e + 4] for e in range(len(connectivity) // 4)]
+    points = array("Points", "coordinates").reshape(-1, 3)[:, :2]
+    u = array("PointData", "displacement").reshape(-1, 3)[:, :2]
+    quads = array("Cells", "connectivity").astype(int).reshape(-1, 4)
     pressure = array("PointData", "contact_pressure")
-    top = max(y for _, y in xy)
-    surface = sorted((x, p) for (x, y), p in zip(xy, pressure) if y == top)
-    return {"xy": xy, "deformed": deformed, "quads": quads, "e_u": array("CellData", "strain_intensity"),
-            "plastic": array("CellData", "plastic"), "surface_pressure": surface}
+    top = points[:, 1].max()
+    on_top = points[:, 1] == top
+    surface = sorted(zip(points[on_top, 0].tolist(), pressure[on_top].tolist()))
+    plastic = array("CellData", "plastic")
+    try:
+        plastic_points = array("CellData", "plastic_points")
+    except KeyError:  # an older run's fields: the flag alone
+        plastic_points = 4.0 * plastic
+    return {"xy": points, "deformed": points + u, "quads": quads, "e_u": array("CellData", "strain_intensity"),
+            "e_u_nodal": array("PointData", "strain_intensity"), "plastic": plastic,
+            "plastic_points": plastic_points, "surface_pressure": surface}
 
 
-def yielded_outline(quads, plastic):
-    """The edges between yielded and elastic elements (or the mesh boundary): the zone's outline."""
-    edges = {}
-    for quad, flag in zip(quads, plastic):
-        for k in range(4):
-            edge = tuple(sorted((quad[k], quad[(k + 1) % 4])))
-            edges.setdefault(edge, []).append(flag > 0)
-    return [edge for edge, flags in edges.items() if any(flags) and not all(flags) or flags == [True]]
+def structured(xy):
+    """(nx, ny) of indentsim's structured mesh: node n = i * ny + j (x index i, y index j)."""
+    ny = int(np.count_nonzero(xy[:, 0] == xy[0, 0]))
+    return len(xy) // ny, ny
 
 
-def plot_plastic_zone(case, name, row, fields, outdir):
+def nodal_average(quads, cell_values, nodes):
+    total, count = np.zeros(nodes), np.zeros(nodes)
+    for k in range(4):
+        np.add.at(total, quads[:, k], cell_values)
+        np.add.at(count, quads[:, k], 1)
+    return total / np.maximum(count, 1)
+
+
+def plot_plastic_zone(case, summary, row, fields, units, size, outdir, deepest=None):
+    """`deepest`: the deepest depth reached up to the state shown; below it the state is unloaded
+    (J2: the region that has yielded is then drawn too; at the deepest state it is the region
+    e_u >= e0)."""
+    unloaded = deepest is not None and float(row["alpha"]) < deepest
     xy, deformed, quads = fields["xy"], fields["deformed"], fields["quads"]
-    e0 = case["material"]["e0"]
-    a = max(float(row["a"]), 1e-300)
-    outline = yielded_outline(quads, fields["plastic"])
-    # The window follows the zone: the contact and the yielded region, with a margin.
-    reach = max([a] + [max(abs(xy[n][0]), abs(xy[n][1])) for edge in outline for n in edge])
-    window = 1.3 * reach if outline else 3 * a
-    polys, values = [], []
-    for quad, value in zip(quads, fields["e_u"]):
-        if min(xy[n][0] for n in quad) > window or max(xy[n][1] for n in quad) < -window:
-            continue
-        polys.append([(deformed[n][0] * 1e3, deformed[n][1] * 1e3) for n in quad])
-        values.append(value / e0)
-    fig, ax = plt.subplots(figsize=(6.5, 5))
-    cells = PolyCollection(polys, array=values, cmap="viridis", edgecolors="face", linewidths=0.2)
-    ax.add_collection(cells)
-    fig.colorbar(cells, ax=ax, label="strain intensity e_u / e0")
-    for k, (n1, n2) in enumerate(outline):
-        ax.plot([deformed[n1][0] * 1e3, deformed[n2][0] * 1e3], [deformed[n1][1] * 1e3, deformed[n2][1] * 1e3], "w-",
-                lw=1.2, label="yielded region" if k == 0 else None)
     scene = Scene(case)
-    alpha = float(row["alpha"])
-    outline_xs = [window * k / 200 for k in range(201)]
-    punch = [(x, scene.punch_height(x)) for x in outline_xs if scene.punch_height(x) is not None]
-    ax.plot([x * 1e3 for x, _ in punch], [(g - alpha) * 1e3 for _, g in punch], "r-", lw=1.5, label="punch")
-    ax.set_xlim(0, window * 1e3)
-    ax.set_ylim(-window * 1e3, 0.15 * window * 1e3)
-    ax.set_aspect("equal")
-    ax.set_xlabel(("r" if scene.axisymmetric else "x") + " [mm] (deformed)")
-    ax.set_ylabel(("z" if scene.axisymmetric else "y") + " [mm] (deformed)")
-    count = int(sum(1 for f in fields["plastic"] if f > 0))
-    ax.set_title(f"{name}: α = {alpha * 1e6:.3g} µm, {count} yielded elements")
-    ax.legend(loc="lower right", fontsize=7)
-    save(fig, outdir, "plastic_zone")
-
-
-def plot_analysis(path):
-    """The Oliver-Pharr analysis of analysis.json: each unloading branch with its power-law fit,
-    the stiffness S as the tangent at h_max, h_f, h_c and h_max marked, and the numbers beside."""
-    report = json.loads(path.read_text())
-    depth, force = report["curve_si"]["depth"], report["curve_si"]["force"]
-    axi = report["scene"] == "axisymmetric"
-    deepest = max(depth) if depth else 1.0
-    h_unit, h_scale = ("nm", 1e9) if deepest < 20e-6 else ("µm", 1e6)
-    peak = max(force) if force else 1.0
-    if axi:
-        p_unit, p_scale = ("mN", 1e3) if peak < 1.0 else ("N", 1.0)
+    model = case["material"]["model"]
+    e0 = case["material"].get("e0")
+    scale = e0 if e0 else 1.0
+    a = max(float(row["a"]), 1e-300)
+    nx, ny = structured(xy)
+    grid = lambda v: v.reshape(nx, ny)  # noqa: E731
+    ratio_nodal = fields["e_u_nodal"] / scale
+    yielded_fraction = nodal_average(quads, fields["plastic_points"] / 4.0, len(xy))
+    # The window follows the zone: the contact and where e_u >= e0 or the material has yielded.
+    zone = (ratio_nodal >= 1.0) | (yielded_fraction >= 0.5)
+    reach = max([a] + np.abs(xy[zone]).max(axis=1).tolist()) if zone.any() else a
+    window = 1.3 * reach if zone.any() else 3 * a
+    keep = [q for q in range(len(quads))
+            if xy[quads[q], 0].min() <= window and xy[quads[q], 1].max() >= -window]
+    values = fields["e_u"][keep] / scale
+    positive = values[values > 0]
+    vmax = float(values.max()) if len(values) else 1.0
+    # A field the tip dominates (its maximum ten times the median, as under a cone or deep in the
+    # plastic range) on a logarithmic scale over three decades; else linear from 0.
+    log = len(positive) > 0 and (vmax > 10 * float(np.median(positive)) or vmax > 10)
+    norm = LogNorm(vmin=max(float(positive.min()), vmax * 1e-3), vmax=vmax) if log else Normalize(vmin=0, vmax=vmax)
+    fig, axes = ip.figure(size)
+    ax = axes[0]
+    polys = np.array([units.position(deformed[quads[q]]) for q in keep])
+    mirrored = polys.copy()
+    mirrored[:, :, 0] *= -1
+    cells = PolyCollection(np.concatenate([polys, mirrored]), array=np.concatenate([values, values]),
+                           cmap="viridis", norm=norm, edgecolors="face", linewidths=0.3, antialiased=False)
+    ax.add_collection(cells)
+    what = "e$_u$/e$_0$" if e0 else "e$_u$"
+    # Where the maximum is: the centre of its element (deformed), named in the colour bar's label.
+    top = keep[int(np.argmax(values))]
+    cx, cz = units.position(deformed[quads[top]].mean(axis=0))
+    r = "r" if scene.axisymmetric else "x"
+    where = f"{r} = {ip.number(abs(cx), 2)}, z = {ip.number(cz, 2)} {units.position.name}"
+    if size == "slide":
+        label = f"strain intensity {what}" + (", log scale" if log else "") + \
+            f"\n(max {ip.number(vmax, 3)} at {where})"
     else:
-        p_unit, p_scale = ("kN/m", 1e-3) if peak > 1e3 else ("N/m", 1.0)
+        label = f"{what}" + (" (log)" if log else "") + f"; max {ip.number(vmax, 3)}"
+    bar = fig.colorbar(cells, ax=ax, label=label, extend="min" if log and float(positive.min()) < vmax * 1e-3
+                       else "neither", shrink=0.95, pad=0.02)
+    bar.ax.tick_params(labelsize=plt.rcParams["ytick.labelsize"])
+    if log:
+        bar.ax.yaxis.set_major_formatter(plt.FuncFormatter(lambda v, _: ip.number(v, 3)))
+    # The yield outline: e_u = e0 on the nodal field (Gauss-point values extrapolated and averaged),
+    # contoured on the deformed mesh, both halves.
+    X, Y = grid(units.position(deformed[:, 0])), grid(units.position(deformed[:, 1]))
+    handles = []
+    lw = plt.rcParams["lines.linewidth"]
+    outline = [patheffects.withStroke(linewidth=lw * 1.6, foreground="black")]
+    if e0 and ratio_nodal.max() >= 1.0:
+        style = "--" if model == "elastic" else "-"
+        for sign in (1, -1):
+            contour = ax.contour(sign * X, Y, grid(ratio_nodal), levels=[1.0], colors="white", linewidths=lw * 0.9,
+                                 linestyles=style)
+            plt.setp(contour.collections, path_effects=outline)
+        handles.append(Line2D([], [], color="white", lw=lw * 0.9, ls=style, path_effects=outline,
+                              label="e$_u$ = e$_0$" + (": where a plastic law would yield" if model == "elastic"
+                                                       else "" if unloaded else " (yield)")))
+    if model == "j2" and unloaded and yielded_fraction.max() >= 0.5:
+        for sign in (1, -1):
+            contour = ax.contour(sign * X, Y, grid(yielded_fraction), levels=[0.5], colors=ip.PURPLE,
+                                 linewidths=lw * 0.8, linestyles="--")
+            plt.setp(contour.collections, path_effects=outline)
+        handles.append(Line2D([], [], color=ip.PURPLE, lw=lw * 0.8, ls="--", path_effects=outline,
+                              label="has yielded (plastic strain > 0)"))
+    h = float(row["alpha"])
+    xs = np.linspace(0, window, 400)
+    punch = [(x, scene.punch_height(x)) for x in xs if scene.punch_height(x) is not None]
+    px = units.position(np.array([x for x, _ in punch]))
+    pz = units.position(np.array([g - h for _, g in punch]))
+    ax.plot(np.concatenate([-px[::-1], px]), np.concatenate([pz[::-1], pz]), "-", color=ip.THEORY, lw=lw * 1.1,
+            zorder=5)
+    handles.append(Line2D([], [], color=ip.THEORY, lw=lw * 1.1, label="indenter"))
+    w = units.position(window)
+    ax.set_xlim(-w, w)
+    ax.set_ylim(-w, 0.15 * w)
+    ax.set_aspect("equal")
+    ax.grid(False)
+    ax.set_facecolor("#f4f4f4")
+    ax.set_xlabel(f"{'radial coordinate $r$' if scene.axisymmetric else '$x$'} [{units.position.name}]" +
+                  (" (deformed mesh, mirrored about the axis)" if size == "slide" else ""))
+    ax.set_ylabel(f"$z$ [{units.position.name}] (deformed)")
+    count = int(np.count_nonzero(fields["plastic"] > 0))
+    yielded = f"{count} of {len(quads)} elements yielded" if model != "elastic" else "an elastic run, no yield"
+    title = f"{'plastic zone' if model != 'elastic' else 'strain intensity'} at $h$ = {units.depth.text(h)} " \
+        f"(step {row['step']}" + \
+        (f", unloaded from {units.depth.text(deepest)}" if unloaded else "") + f"): {yielded}"
+    ax.legend(handles=handles, loc="lower left", facecolor="#ffffff", framealpha=0.95)
+    ip.run_title(fig, title, ip.describe_run(case, summary))
+    ip.save(fig, outdir, "plastic_zone")
+
+
+# --- analysis.png ---------------------------------------------------------------------------------
+
+def analysis_case(report):
+    """A load case's worth of words from analysis.json: the run's own case.toml where it is there."""
+    curve = pathlib.Path(report.get("curve", ""))
+    if report.get("origin") == "run" and (curve.parent / "case.toml").is_file():
+        case = tomllib.loads((curve.parent / "case.toml").read_text())
+        summary_file = curve.parent / "summary.json"
+        summary = json.loads(summary_file.read_text()) if summary_file.is_file() else {}
+        return case, summary, curve.parent
+    ind = report.get("indenter", {})
+    punch = {"shape": ind.get("shape", "sphere")}
+    if "half_angle_degrees" in ind:
+        punch["half_angle"] = ind["half_angle_degrees"]
+    for k in ("tip_radius", "radius", "profile"):
+        if k in ind:
+            punch[k] = ind[k]
+    return {"geometry": {"kind": report.get("scene", "axisymmetric")}, "punch": punch}, {}, None
+
+
+def plot_analysis(path, size):
+    """The Oliver-Pharr analysis of analysis.json: the whole curve, each unloading branch with its
+    power-law fit, the stiffness S as the tangent at h_max, h_f, h_c and h_max marked, and the
+    numbers beside."""
+    report = json.loads(path.read_text())
+    depth = np.array(report["curve_si"]["depth"], float)
+    force = np.array(report["curve_si"]["force"], float)
+    axi = report["scene"] == "axisymmetric"
+    case, summary, run = analysis_case(report)
     branches = report["branches"]
-    fig, axes = plt.subplots(len(branches), 3, figsize=(15, 4.2 * len(branches)), squeeze=False,
-                             gridspec_kw={"width_ratios": [1, 1, 0.9]})
-    h = [d * h_scale for d in depth]
-    P = [f * p_scale for f in force]
+    if run is not None:
+        units = ip.RunUnits.of_run(run)
+        rows = read_csv(run / "curve.csv")
+        same = len(rows) == len(depth) and "contact_nodes" in rows[0]  # curve_si is the run's curve.csv
+        nodes = column_of(rows, "contact_nodes", 1.0) if same else None
+        title = ip.describe_run(case, summary)
+    else:
+        contact = np.zeros_like(depth)
+        if branches:
+            contact[branches[0]["index"]["peak"]] = max(b["contact_radius"] or 0.0 for b in branches)
+        units = ip.RunUnits.of_curve(depth, force, contact, axi)
+        nodes = None
+        title = f"{pathlib.Path(report['curve']).name}, measured; {ip.indenter_words(case)}; " \
+                f"{'axisymmetric' if axi else 'plane strain'}"
+    n = max(len(branches), 1)
+    slide = size == "slide"
+    if slide:
+        fig, axes = plt.subplots(n, 3, figsize=(ip.SLIDE_WIDTH, ip.SLIDE_WIDTH * 9 / 16 * (1 + 0.8 * (n - 1))),
+                                 squeeze=False, width_ratios=[0.85, 1.1, 1.05])
+    else:
+        fig, axes = plt.subplots(3 * n, 1, figsize=(ip.COLUMN_WIDTH, 7.4 * n), squeeze=False,
+                                 height_ratios=[1, 1, 1.15] * n)
+        axes = [[axes[3 * k][0], axes[3 * k + 1][0], axes[3 * k + 2][0]] for k in range(n)]
+    h, P = units.depth(depth), units.force(force)
+    lw = plt.rcParams["lines.linewidth"]
     for (whole, ax, table_ax), b in zip(axes, branches):
-        i0, ip, ie = b["index"]["loading_start"], b["index"]["peak"], b["index"]["end"]
+        i0, ip_, ie = b["index"]["loading_start"], b["index"]["peak"], b["index"]["end"]
         fit = b["fit"]
         h_f, h_max, P_max = fit["h_f"], b["h_max"], b["P_max"]
         S = b["S_fit"]
         lo, hi = fit["range"]
-        # Left: the whole curve, the branch's loading and unloading in their colours.
-        whole.plot(h, P, "-", lw=0.8, color="lightgray")
-        whole.plot(h[i0:ip + 1], P[i0:ip + 1], "-", lw=1.2, color="tab:blue", label="loading")
-        whole.plot(h[ip:ie + 1], P[ip:ie + 1], "-", lw=1.2, color="tab:orange", label="unloading")
-        whole.set_xlabel(f"depth h [{h_unit}]")
-        whole.set_ylabel(f"force P [{p_unit}]")
-        whole.set_title(f"{pathlib.Path(report['curve']).name}: unloading {b['where']}", fontsize=10)
-        whole.legend(fontsize=7, loc="upper left")
+        # Left: the whole curve, as computed (a run) or as measured.
+        if nodes is not None:
+            ip.draw_load_depth(whole, depth, force, nodes, units, markers=len(depth) < 200, separated_label=False)
+        else:
+            whole.plot(h, P, "-", lw=lw * 0.5, color="#bbbbbb")
+            whole.plot(h[i0:ip_ + 1], P[i0:ip_ + 1], "-", lw=lw * 0.8, color=ip.LOADING, label="loading")
+            whole.plot(h[ip_:ie + 1], P[ip_:ie + 1], "-", lw=lw * 0.8, color=ip.UNLOADING, label="unloading")
+        if len(branches) > 1:  # which of the branches this row of panels analyses
+            touching_rows = [k for k in range(ip_, ie + 1) if P[k] > 0]
+            whole.plot(h[touching_rows], P[touching_rows], "-", color=ip.UNLOADING, lw=lw * 4, alpha=0.3, zorder=1,
+                       solid_capstyle="round", label="this branch")
+        whole.set_xlabel(f"depth $h$ [{units.depth.name}]")
+        whole.set_ylabel(units.force_axis())
+        whole.set_title("whole curve")
+        whole.set_xlim(left=0)
+        whole.legend(loc="upper left", fontsize=plt.rcParams["legend.fontsize"] * 0.9)
         # Middle: the unloading branch, the fit over its range, S as the tangent at h_max (it
         # meets the depth axis at h_max - P_max / S), and h_f, h_c, h_max.
-        ax.plot(h[ip:ie + 1], P[ip:ie + 1], "o", ms=3, color="tab:orange", label="unloading")
-        xs = [h_f + (h_max - h_f) * k / 100 for k in range(101)]
-        ax.plot([x * h_scale for x in xs], [fit["B"] * (x - h_f) ** fit["m"] * p_scale for x in xs], "-",
-                color="black", lw=1.2, label=f"P = B (h - h_f)^m, m = {fit['m']:.3g} (fit over {lo:g}-{hi:g} P_max)")
+        touching = slice(ip_, ie + 1)
+        hs, Ps = h[touching], P[touching]
+        on = Ps > 0 if nodes is not None else np.ones_like(Ps, bool)
+        dense = on.sum() > 60  # a measured branch: small markers under the fit
+        ax.plot(hs[on], Ps[on], "o", color=ip.UNLOADING, label="unloading", zorder=2 if dense else 4,
+                ms=plt.rcParams["lines.markersize"] * (0.45 if dense else 1.0))
+        left = min(h_f, h_max - P_max / S) - 0.12 * (h_max - min(h_f, h_max - P_max / S))
+        off = ~on & (hs >= units.depth(left))
+        if off.any():
+            ax.plot(hs[off], Ps[off], "x", color=ip.SEPARATED, label="separated (P = 0)", zorder=4, clip_on=False)
+        xs = np.linspace(h_f, h_max, 200)
+        ax.plot(units.depth(xs), units.force(fit["B"] * (xs - h_f) ** fit["m"]), "-", color=ip.BLACK, lw=lw * 0.8,
+                label=f"fit $B(h - h_\\mathrm{{f}})^m$, $m$ = {fit['m']:.3g}",
+                zorder=3)
         h0 = h_max - P_max / S
-        ax.plot([h0 * h_scale, h_max * h_scale], [0, P_max * p_scale], "--", color="tab:red", lw=1,
-                label=f"S = {S:.4g} {'N/m' if axi else 'N/m per m'}")
-        for k, (x, label) in enumerate(((h_f, "h_f"), (b["h_c"], "h_c"), (h_max, "h_max"))):
-            ax.axvline(x * h_scale, color="gray", ls=":", lw=0.8)
-            ax.annotate(label, (x * h_scale, P_max * p_scale * (1.03 + 0.05 * (k % 2))), ha="center", fontsize=8)
-        left = min(h_f, h0) - 0.1 * (h_max - min(h_f, h0))
-        ax.set_xlim(left * h_scale, (h_max + 0.05 * (h_max - left)) * h_scale)
-        ax.set_ylim(0, P_max * p_scale * 1.15)
-        ax.set_xlabel(f"depth h [{h_unit}]")
-        ax.set_ylabel(f"force P [{p_unit}]")
-        ax.legend(fontsize=7, loc="center left")
-        rows = [("P_max", f"{P_max * p_scale:.5g} {p_unit}"), ("h_max", f"{h_max * h_scale:.5g} {h_unit}"),
-                ("S (fit)", f"{S:.5g} N/m"), ("S (exact)", "-" if b["S_exact"] is None else f"{b['S_exact']:.5g} N/m"),
-                ("epsilon, beta", f"{b['epsilon']:g}, {b['beta']:g}"), ("h_c", f"{b['h_c'] * h_scale:.5g} {h_unit}"),
-                ("h_f", f"{h_f * h_scale:.5g} {h_unit}"),
-                ("A_c" if axi else "2 r(h_c)", f"{b['A_c']:.4g} {'m²' if axi else 'm'}"),
-                ("H", f"{b['H'] / 1e9:.4g} GPa"),
-                ("E_r", "not defined (plane strain)" if b["E_r"] is None and not axi
-                 else ("-" if b["E_r"] is None else f"{b['E_r'] / 1e9:.4g} GPa")),
-                ("E (specimen)", "-" if b["E"] is None else f"{b['E'] / 1e9:.4g} GPa"),
-                ("W_e / W_t", f"{b['W_e_over_W_t']:.3f}")]
-        if b["pile_up_ratio"] is not None:
-            rows += [("true contact radius", f"{b['true_contact_radius'] * h_scale:.5g} {h_unit}"),
-                     ("H (true area)", f"{b['true_H'] / 1e9:.4g} GPa"),
-                     ("E_r (true area)", "-" if b["true_E_r"] is None else f"{b['true_E_r'] / 1e9:.4g} GPa"),
-                     ("A_true / A_c", f"{b['pile_up_ratio']:.3f} ({'pile-up' if b['pile_up_ratio'] > 1 else 'sink-in'})")]
+        ax.plot(units.depth(np.array([h0, h_max])), units.force(np.array([0, P_max])), "--", color=ip.THEORY,
+                lw=lw * 0.8, label=f"$S$ = {units.stiffness.text(S)}, tangent", zorder=3)
+        # h_f, h_c and h_max: dotted lines, named on a second depth axis along the top.
+        marks = [h_f, b["h_c"], h_max]
+        for x in marks:
+            ax.axvline(units.depth(x), color="#777777", ls=":", lw=1)
+        top = ax.secondary_xaxis("top")
+        top.set_xticks([units.depth(x) for x in marks], ["$h_\\mathrm{f}$", "$h_\\mathrm{c}$", "$h_\\mathrm{max}$"])
+        top.tick_params(length=0, pad=2)
+        left = min(h_f, h0) - 0.12 * (h_max - min(h_f, h0))
+        ax.set_xlim(units.depth(left), units.depth(h_max + 0.05 * (h_max - left)))
+        ax.set_ylim(0, units.force(P_max) * 1.08)
+        ax.set_xlabel(f"depth $h$ [{units.depth.name}]")
+        ax.set_ylabel(units.force_axis())
+        ax.set_title(f"unloading, {b['where'].replace('-', '–')}")
+        ax.legend(loc="upper left", fontsize=plt.rcParams["legend.fontsize"] * 0.9)
+        # Right: the numbers, in the figures' units.
+        hardness = ip.stress_unit(b["H"])
+        modulus = units.modulus
+        area_unit = units.position
+        rows = [("$P_\\mathrm{max}$", units.force.text(P_max, 4)), ("$h_\\mathrm{max}$", units.depth.text(h_max, 4)),
+                ("$S$ (fit)", units.stiffness.text(S, 4)),
+                ("$S$ (exact)", "–" if b["S_exact"] is None else units.stiffness.text(b["S_exact"], 4)),
+                ("fit exponent $m$", f"{fit['m']:.4g}"),
+                ("fit range", f"{100 * lo:g}–{100 * hi:g}% of $P_\\mathrm{{max}}$"),
+                ("ε, β", f"{b['epsilon']:g}, {b['beta']:g}"), ("$h_\\mathrm{c}$", units.depth.text(b["h_c"], 4)),
+                ("$h_\\mathrm{f}$", units.depth.text(h_f, 4)),
+                ("$A_\\mathrm{c}$" if axi else "$2a(h_\\mathrm{c})$",
+                 f"{ip.number(b['A_c'] / area_unit.scale**2, 4)} {area_unit.name}²" if axi
+                 else area_unit.text(b["A_c"], 4)),
+                ("$H$", hardness.text(b["H"], 4)),
+                ("$E_\\mathrm{r}$", "– (plane strain)" if b["E_r"] is None and not axi
+                 else ("–" if b["E_r"] is None else modulus.text(b["E_r"], 4))),
+                ("$E$ (specimen)", "–" if b["E"] is None else modulus.text(b["E"], 4)),
+                ("$W_\\mathrm{e}/W_\\mathrm{t}$", f"{b['W_e_over_W_t']:.3f}")]
+        if b.get("pile_up_ratio") is not None:
+            rows += [("$a$ (true contact)", area_unit.text(b["true_contact_radius"], 4)),
+                     ("$H$ (true area)", hardness.text(b["true_H"], 4)),
+                     ("$E_\\mathrm{r}$ (true area)",
+                      "–" if b["true_E_r"] is None else modulus.text(b["true_E_r"], 4)),
+                     ("$A_\\mathrm{true}/A_\\mathrm{c}$",
+                      f"{b['pile_up_ratio']:.3f} ({'pile-up' if b['pile_up_ratio'] > 1 else 'sink-in'})")]
         table_ax.axis("off")
-        table = table_ax.table(cellText=[[k, v] for k, v in rows], colLabels=["Oliver-Pharr", ""], loc="center",
-                               cellLoc="left", colWidths=[0.45, 0.55])
+        table = table_ax.table(cellText=[[k, v] for k, v in rows], colLabels=["Oliver-Pharr", "(this branch)"],
+                               cellLoc="left", colWidths=[0.47, 0.53], edges="horizontal", bbox=[0, 0, 1, 1])
         table.auto_set_font_size(False)
-        table.set_fontsize(8)
-        table.scale(1, 1.25)
-    fig.tight_layout()
+        table.set_fontsize(plt.rcParams["legend.fontsize"] * (0.95 if slide else 1.0))
+        for (r, _), cell in table.get_celld().items():
+            cell.set_edgecolor("#cccccc")
+            if r == 0:
+                cell.get_text().set_fontweight("bold")
+    if not branches:
+        axes[0][0].text(0.5, 0.5, "no unloading branch", ha="center", transform=axes[0][0].transAxes)
+    ip.run_title(fig, title)
     stem = path.with_suffix("")
-    for suffix in ("png", "svg"):
-        fig.savefig(f"{stem}.{suffix}", dpi=150)
-    plt.close(fig)
-    print(f"wrote {stem}.png")
+    ip.save(fig, stem.parent, stem.name)
+
+
+# --- sweep.png ------------------------------------------------------------------------------------
+
+def as_number(text):
+    try:
+        return float(text)
+    except (TypeError, ValueError):
+        return None
+
+
+def sweep_case(folder, manifest):
+    """The load case of the sweep's first run, for the figure's words: the manifest's own copy
+    (indentsim_sweep 1), the run's kept case.toml, or the base case with [set] and the run's
+    values applied (the base found as the sweep named it, from the folder it was started in);
+    {} when none is found."""
+    runs = manifest.get("runs") or []
+    if not runs:
+        return {}
+    first = runs[0]
+    if first.get("case"):
+        return tomllib.loads(first["case"])
+    kept = folder / "runs" / first["hash"] / "case.toml"
+    if kept.is_file():
+        return tomllib.loads(kept.read_text())
+    base = pathlib.Path(manifest.get("base", ""))
+    candidates = [base]
+    out = pathlib.Path(manifest.get("out", ""))
+    if not base.is_absolute() and not out.is_absolute() and out.parts:
+        # The folder the sweep was started in: the results folder less its `out` path.
+        started = folder.resolve()
+        for _ in out.parts:
+            started = started.parent
+        candidates.append(started / base)
+    for candidate in candidates:
+        if candidate.is_file():
+            try:
+                case = tomllib.loads(candidate.read_text())
+                for assignment in list(manifest.get("set", [])) + [f"{k}={v}" for k, v in
+                                                                    zip(manifest.get("keys", []), first["values"])]:
+                    key, value = assignment.split("=", 1)
+                    *sections, name = key.strip().strip('"').split(".")
+                    table = case
+                    for section in sections:
+                        table = table.setdefault(section, {})
+                    table[name] = tomllib.loads(f"v = {value}")["v"]
+                return case
+            except (tomllib.TOMLDecodeError, ValueError, AttributeError):
+                return {}
+    return {}
+
+
+def plot_sweep(folder, size):
+    """FOLDER/figures/sweep.png and .svg: H, E_r (plane strain: the peak load) and the pile-up
+    ratio against the swept keys, from results.csv (and manifest.json for the case's words)."""
+    manifest_file = folder / "manifest.json"
+    manifest = json.loads(manifest_file.read_text()) if manifest_file.is_file() else {}
+    with open(folder / "results.csv", newline="") as f:
+        header = next(csv.reader(f), [])
+    # The swept keys: the manifest's, or results.csv's columns between hash and status.
+    keys = manifest.get("keys") or header[header.index("hash") + 1:header.index("status")]
+    rows = read_csv(folder / "results.csv")
+    done = [r for r in rows if r["status"] == "finished"]
+    # The pile-up ratio: results.csv's column, or (older sweeps) each run's kept summary.json.
+    pile_up = {}
+    for r in done:
+        if r.get("pile_up_ratio"):
+            pile_up[r["hash"]] = float(r["pile_up_ratio"])
+            continue
+        s = folder / "runs" / r["hash"] / "summary.json"
+        if s.is_file():
+            unloading = json.loads(s.read_text()).get("unloading") or []
+            analysis = unloading[0].get("analysis") if unloading else None
+            if analysis and analysis.get("pile_up_ratio") is not None:
+                pile_up[r["hash"]] = analysis["pile_up_ratio"]
+    base_case = sweep_case(folder, manifest)
+    numeric = {k: all(as_number(r[k]) is not None for r in rows) for k in keys}
+    distinct = {k: sorted({r[k] for r in rows}, key=lambda v: (as_number(v) is None, as_number(v) or 0, v))
+                for k in keys}
+    # x: the first numeric key with the most values; lines: the values of the next key.
+    order = sorted(keys, key=lambda k: (-numeric[k], -len(distinct[k]), keys.index(k)))
+    x_key = order[0]
+    others = [k for k in keys if k != x_key]
+    x_values = [as_number(v) for v in distinct[x_key]] if numeric[x_key] else list(range(len(distinct[x_key])))
+    x_label, x_unit = ip.key_axis(x_key, [v for v in x_values if v is not None])
+
+    def x_of(r):
+        return x_unit(as_number(r[x_key])) if numeric[x_key] else distinct[x_key].index(r[x_key])
+
+    def group_of(r):
+        return tuple(r[k] for k in others)
+
+    groups = sorted({group_of(r) for r in rows}, key=lambda g: tuple(as_number(v) or 0 for v in g))
+    latin = len(groups) > 8 or all(sum(1 for r in rows if group_of(r) == g) == 1 for g in groups) and len(others) > 0
+    H = [float(r["H"]) for r in done if r["H"]]
+    Er = [float(r["E_r"]) for r in done if r["E_r"]]
+    h_unit = ip.stress_unit(max(H)) if H else ip.Unit("GPa", 1e9)
+    e_unit = ip.stress_unit(max(Er)) if Er else ip.Unit("GPa", 1e9)
+    plane_strain = not ip.is_axisymmetric(base_case) if base_case else \
+        any("N/m" in r.get("force_unit", "") for r in done)
+    panels = [("hardness $H$", f"[{h_unit.name}]", lambda r: float(r["H"]) / h_unit.scale if r["H"] else None,
+               "no hardness: no unloading branch was analysed\n(results.csv: message)")]
+    if plane_strain:  # E_r is not defined in plane strain: the peak load instead
+        peaks = [float(r["peak_force"]) for r in done if r["peak_force"]]
+        p_unit = ip.force_unit(max(peaks), False) if peaks else ip.Unit("N/m", 1.0)
+        panels.append(("peak load $P_\\mathrm{max}$ ($E_\\mathrm{r}$: none in plane strain)",
+                       f"[{p_unit.name}]", lambda r: float(r["peak_force"]) / p_unit.scale if r["peak_force"] else None,
+                       "no peak load"))
+    else:
+        panels.append(("reduced modulus $E_\\mathrm{r}$", f"[{e_unit.name}]",
+                       lambda r: float(r["E_r"]) / e_unit.scale if r["E_r"] else None,
+                       "no reduced modulus: no unloading branch was analysed\n(results.csv: message)"))
+    panels.append(("pile-up ratio $A_\\mathrm{true}/A_\\mathrm{c}$", "", lambda r: pile_up.get(r["hash"]),
+                   "no pile-up ratio: results.csv has none and the runs'\nsummary.json were not kept "
+                   "(sweep.keep: \"summary\")"))
+    fig, axes = ip.figure(size, columns=3)
+    colours = [ip.LOADING, ip.UNLOADING, ip.RELOADING, ip.THEORY, ip.PURPLE, ip.SKY, ip.BLACK, "#F0E442"]
+    numbers = [v for v in x_values if v is not None]
+    log_x = numeric[x_key] and min(numbers) > 0 and max(numbers) / min(numbers) >= 8
+    for ax, (name, unit, value, empty) in zip(axes, panels):
+        plotted = False
+        if latin:
+            xs = [x_of(r) for r in done if value(r) is not None]
+            ys = [value(r) for r in done if value(r) is not None]
+            if others and all(as_number(r[others[0]]) is not None for r in done):
+                cs = [as_number(r[others[0]]) for r in done if value(r) is not None]
+                c_label, c_unit = ip.key_axis(others[0], [as_number(r[others[0]]) for r in done])
+                points = ax.scatter(xs, ys, c=[c_unit(c) for c in cs], cmap="viridis", zorder=3,
+                                    vmin=c_unit(min(as_number(r[others[0]]) for r in done)),
+                                    vmax=c_unit(max(as_number(r[others[0]]) for r in done)))
+                if ax is axes[-1] and xs:
+                    fig.colorbar(points, ax=axes, label=c_label, shrink=0.9)
+            else:
+                ax.scatter(xs, ys, color=ip.LOADING, zorder=3)
+            plotted = bool(xs)
+        else:
+            for n, g in enumerate(groups):
+                mine = sorted([r for r in done if group_of(r) == g and value(r) is not None], key=x_of)
+                if not mine:
+                    continue
+                label = ", ".join(f"{ip.key_symbol(k)} = {ip.key_value_text(k, v)}" for k, v in zip(others, g)) or None
+                ax.plot([x_of(r) for r in mine], [value(r) for r in mine], "o-", color=colours[n % len(colours)],
+                        label=label)
+                plotted = True
+        if name.startswith("pile-up") and plotted:
+            ax.axhline(1.0, color="#777777", ls=":", lw=1.2)
+            make_room(ax, 1.0)
+            ax.annotate("pile-up ↑ / sink-in ↓", (0.98, 1.0), xycoords=("axes fraction", "data"), ha="right",
+                        va="bottom", color="#555555", fontsize=plt.rcParams["legend.fontsize"], bbox=NOTE_BOX)
+        material = base_case.get("material", {})
+        if name.startswith("reduced") and plotted and not {"material.E", "material.nu"} & set(keys) and \
+                material.get("E") and base_case.get("analysis", {}).get("indenter_E") in (None, "rigid"):
+            e_star = material["E"] / (1 - material.get("nu", 0.3) ** 2)
+            ax.axhline(e_star / e_unit.scale, color="#777777", ls=":", lw=1.2)
+            make_room(ax, e_star / e_unit.scale)
+            ax.annotate(f"$E/(1-ν^2)$ = {e_unit.text(e_star)}", (0.98, e_star / e_unit.scale),
+                        xycoords=("axes fraction", "data"), ha="right", va="bottom", color="#555555",
+                        fontsize=plt.rcParams["legend.fontsize"], bbox=NOTE_BOX)
+        if not plotted:  # the panel says why it is empty
+            ax.text(0.5, 0.5, textwrap.fill(empty.replace("\n", " "), 30), ha="center", va="center",
+                    transform=ax.transAxes, color="#555555", fontsize=plt.rcParams["legend.fontsize"])
+            ax.set_xticks([])
+            ax.set_yticks([])
+            for spine in ax.spines.values():
+                spine.set_color("#dddddd")
+        short, _, note = name.partition(" (")
+        ax.set_title(short)
+        ax.set_ylabel(f"{short} {unit}".strip())
+        if note:
+            ax.annotate("(" + note, (0.98, 0.02), xycoords="axes fraction", ha="right", va="bottom", color="#555555",
+                        fontsize=plt.rcParams["legend.fontsize"])
+        ax.set_xlabel(x_label if plotted else "")
+        if log_x and plotted:
+            ax.set_xscale("log")
+            if len(numbers) <= 6:  # a grid's few values as the ticks; else the axis's own
+                ax.set_xticks([x_unit(v) for v in numbers])
+                ax.get_xaxis().set_minor_formatter(plt.NullFormatter())
+            ax.get_xaxis().set_major_formatter(plt.FuncFormatter(lambda v, _: ip.number(v, 3)))
+        if not numeric[x_key]:
+            ax.set_xticks(range(len(distinct[x_key])), distinct[x_key])
+    handles, labels = axes[0].get_legend_handles_labels()
+    if labels:
+        axes[0].legend(loc="best")
+    counts = {s: sum(1 for r in rows if r["status"] == s) for s in ("finished", "not_converged", "failed", "pending")}
+    status = f"{counts['finished']} of {len(rows)} runs finished" + "".join(
+        f", {v} {k.replace('_', ' ')}" for k, v in counts.items() if k != "finished" and v)
+    without = sum(1 for r in done if not r["H"])
+    if without:
+        status += f"; {without} without Oliver-Pharr numbers (results.csv: message)"
+    varied = " × ".join(f"{ip.KEY_WORDS[k][0]} {ip.KEY_WORDS[k][1]}" if k in ip.KEY_WORDS else k for k in keys)
+    ip.run_title(fig, f"sweep over {varied} ({status})",
+                 ip.describe_run(base_case, omit=keys) if base_case else "")
+    figures = folder / "figures"
+    figures.mkdir(exist_ok=True)
+    ip.save(fig, figures, "sweep")
+
+
+NOTE_BOX = {"boxstyle": "square,pad=0.15", "facecolor": "white", "edgecolor": "none", "alpha": 0.8}
+
+
+def make_room(ax, y):
+    """y-limits that hold a reference line at y with room for its label above."""
+    lo, hi = ax.get_ylim()
+    lo, hi = min(lo, y), max(hi, y)
+    ax.set_ylim(lo, max(hi, y + 0.12 * (hi - lo)))
+
+
+# --- main -------------------------------------------------------------------------------------------
+
+def is_sweep(folder):
+    return (folder / "results.csv").is_file()
+
+
+def read_measured(args, axisymmetric):
+    """The --data curve: (depth [m], force [N, or N/m in plane strain], legend name)."""
+    try:
+        h, p, (du, fu) = ip.read_measured_curve(args.data, args.depth_column, args.force_column, args.depth_unit,
+                                                args.force_unit)
+    except ip.CurveFileError as e:
+        print(f"error: {e}", file=sys.stderr)
+        sys.exit(2)
+    # A plane-strain run's P is a force per unit thickness (N/m), an axisymmetric one's a force (N):
+    # a curve in the other kind of unit is data of the other scene (as `indentsim fit` says).
+    if fu.endswith("/m") == axisymmetric:
+        scene, wanted = ("axisymmetric", "a force (N, mN, ...)") if axisymmetric else \
+            ("plane strain", "a force per unit thickness (N/m, mN/m, ...)")
+        print(f"error: {args.data}: the forces are in {fu}, but the run is {scene}, whose P is {wanted}: give the "
+              "curve of such a scene (or its unit with --force-unit)", file=sys.stderr)
+        sys.exit(2)
+    return h, p, args.data.name
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("outdir", type=pathlib.Path, nargs="?")
+    parser.add_argument("outdir", type=pathlib.Path, nargs="?", help="a run's folder or a sweep's folder")
     parser.add_argument("--step", type=int, help="the increment to show (default: the deepest of the load path)")
     parser.add_argument("--analysis", type=pathlib.Path, help="draw this analysis.json (indentsim analyze) instead")
+    parser.add_argument("--data", type=pathlib.Path, help="a measured load-depth CSV to draw over the run's curve")
+    parser.add_argument("--depth-column", help="--data: the depth column's header name")
+    parser.add_argument("--force-column", help="--data: the force column's header name")
+    parser.add_argument("--depth-unit", help="--data: nm, um, mm or m (else from the header)")
+    parser.add_argument("--force-unit", help="--data: mN, uN, nN or N (else from the header; N/m... in plane strain)")
+    parser.add_argument("--size", choices=ip.SIZES, default="slide",
+                        help="slide (16:9, default) or column (a journal column, 3.5 in wide)")
+    parser.add_argument("--dpi", type=float, help="the PNGs' resolution (default: slide 192, i.e. 1920 x 1080 px; "
+                                                  "column 300)")
     args = parser.parse_args()
+    ip.use_style(args.size, args.dpi)
     if args.analysis:
-        plot_analysis(args.analysis)
+        plot_analysis(args.analysis, args.size)
         return
     if args.outdir is None:
-        parser.error("give a run's folder or --analysis FILE")
+        parser.error("give a run's folder, a sweep's folder or --analysis FILE")
     outdir = args.outdir
-    case_text = (outdir / "case.toml").read_text()
-    case = tomllib.loads(case_text)
-    name = case_name(case_text)
+    if is_sweep(outdir):
+        if args.step is not None or args.data is not None:
+            parser.error(f"{outdir} is a sweep's folder: --step and --data are for a run's folder")
+        plot_sweep(outdir, args.size)
+        return
+    if not (outdir / "case.toml").is_file() or not (outdir / "curve.csv").is_file():
+        sys.exit(f"{outdir}: neither a run's folder (case.toml, curve.csv) nor a sweep's (results.csv)")
+    case = tomllib.loads((outdir / "case.toml").read_text())
     curve = read_csv(outdir / "curve.csv")
     summary = json.loads((outdir / "summary.json").read_text()) if (outdir / "summary.json").is_file() else {}
+    measured = read_measured(args, ip.is_axisymmetric(case)) if args.data else None
     step = args.step if args.step is not None else int(max(curve, key=lambda r: float(r["alpha"]))["step"])
     rows = [r for r in curve if int(r["step"]) == step]
     if not rows:
         sys.exit(f"{outdir}: the run has no step {step} (steps 0 to {curve[-1]['step']})")
     row = rows[0]
-    profiles = [r for r in read_csv(outdir / "profiles.csv") if int(r["step"]) == step]
+    units = ip.RunUnits.of_curve(column_of(curve, "alpha"), column_of(curve, "P"), column_of(curve, "a"),
+                                 ip.is_axisymmetric(case))
+    profiles = [r for r in read_csv(outdir / "profiles.csv") if int(r["step"]) == step] \
+        if (outdir / "profiles.csv").is_file() else []
     fields = read_vtu(vtu_of_step(outdir, step))
     figures = outdir / "figures"
     figures.mkdir(exist_ok=True)
-    plot_curve(case, name, curve, summary, figures)
-    plot_pressure(case, name, row, profiles, fields["surface_pressure"], figures)
+    plot_curve(case, summary, curve, units, args.size, figures, measured)
+    plot_pressure(case, summary, row, profiles, fields["surface_pressure"], units, args.size, figures)
     if profiles:
-        plot_profiles(name, row, profiles, figures)
+        plot_profiles(case, summary, row, profiles, units, args.size, figures)
     else:
         print(f"no layer view tabulated for step {step} (profiles.csv holds the deepest and the final state): "
               "no profiles figure")
-    plot_plastic_zone(case, name, row, fields, figures)
+    before = [float(r["alpha"]) for r in curve if int(r["step"]) <= step]
+    plot_plastic_zone(case, summary, row, fields, units, args.size, figures, deepest=max(before))
     if (outdir / "analysis.json").is_file():
-        plot_analysis(outdir / "analysis.json")
+        plot_analysis(outdir / "analysis.json", args.size)
 
 
 if __name__ == "__main__":

@@ -146,7 +146,8 @@ def main():
         check((unloaded / "fields" / "step_000004.vtu").is_file(), "the peak's fields were not written")
         plot = subprocess.run([str(executable), "plot", str(unloaded)], capture_output=True, text=True)
         check(plot.returncode == 0, f"indentsim plot (unloaded end) failed: {plot.stderr}")
-        check("α = 50 µm" in (unloaded / "figures" / "pressure.svg").read_text(), "the pressure figure is not the peak's")
+        check("= 50 µm (step 4)" in (unloaded / "figures" / "pressure.svg").read_text(),
+              "the pressure figure is not the peak's (h = 50 µm, step 4)")
 
         # indentsim analyze --plot: analysis.json and its figure (the fit, S, h_c and the table).
         sphere = pathlib.Path(tmp) / "sphere"

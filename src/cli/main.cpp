@@ -184,7 +184,7 @@ fs::path figure_script(const std::string& for_what) {
 /// `indentsim plot DIR [--step N] [--data CSV] [--size slide|column]`: the figure script beside this executable, run by Debian's
 /// python3 (the one the setup script gives matplotlib), whatever python3 comes first on the PATH.
 int command_plot(const std::string& dir, const std::optional<int>& step, const std::string& data,
-                 const std::string& size) {
+                 const MeasuredCurveOptions& columns, const std::string& size) {
   const fs::path script = figure_script(dir);
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) throw InputError(dir, "plot", "is not a run's or a sweep's output folder");
@@ -210,6 +210,16 @@ int command_plot(const std::string& dir, const std::optional<int>& step, const s
     if (!fs::is_regular_file(data, ec)) throw InputError(data, "--data", "is not a readable file");
     args.push_back("--data");
     args.push_back(data);
+    for (const auto& [flag, value] : {std::pair<const char*, const std::string&>{"--depth-column", columns.depth_column},
+                                      {"--force-column", columns.force_column},
+                                      {"--depth-unit", columns.depth_unit},
+                                      {"--force-unit", columns.force_unit}})
+      if (!value.empty()) {
+        args.push_back(flag);
+        args.push_back(value);
+      }
+  } else if (columns.given()) {
+    throw InputError(dir, "--data", "the column and unit options describe a measured curve: give it with --data");
   }
   if (!size.empty()) {
     args.push_back("--size");
@@ -561,6 +571,11 @@ int main(int argc, char** argv) {
   plot->add_option("--data", plot_data, "a measured load-depth CSV to overlay on the run's curve (as analyze reads it)");
   plot->add_option("--size", plot_size, "slide (16:9, the default) or column (a journal column)")
       ->check(CLI::IsMember({"slide", "column"}));
+  MeasuredCurveOptions plot_columns;
+  plot->add_option("--depth-column", plot_columns.depth_column, "--data: the depth column's header name");
+  plot->add_option("--force-column", plot_columns.force_column, "--data: the force column's header name");
+  plot->add_option("--depth-unit", plot_columns.depth_unit, "--data: nm, um, mm or m (else from the header)");
+  plot->add_option("--force-unit", plot_columns.force_unit, "--data: mN, uN, nN or N, per length in plane strain (else from the header)");
 
   MeasuredCurveOptions analyze_options;
   std::string analysis_out;
@@ -671,7 +686,7 @@ int main(int argc, char** argv) {
       if (command->parsed() && command->get_option("--out")->count() > 0 && out.empty())
         throw InputError("--out", "--out", "must name a folder (it is empty)");
     if (keys->parsed()) return command_keys(markdown);
-    if (plot->parsed()) return command_plot(file, plot_step, plot_data, plot_size);
+    if (plot->parsed()) return command_plot(file, plot_step, plot_data, plot_columns, plot_size);
     if (analyze->parsed()) return command_analyze(file, overrides, analyze_options, analysis_out, analysis_plot);
     if (fit->parsed()) return command_fit(fit_options, quiet, !no_plot);
     if (run->parsed()) return command_run(file, overrides, out, quiet);
