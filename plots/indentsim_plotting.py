@@ -44,6 +44,14 @@ LOADING, UNLOADING, RELOADING, THEORY = "#0072B2", "#E69F00", "#009E73", "#D55E0
 PURPLE, SKY, BLACK, SEPARATED, MEASURED = "#CC79A7", "#56B4E9", "#000000", "#8c8c8c", "#444444"
 
 
+def add_size_options(parser):
+    """The --size and --dpi options every figure script takes (use_style's arguments)."""
+    parser.add_argument("--size", choices=SIZES, default="slide",
+                        help="slide (16:9, default) or column (a journal column, 3.5 in wide)")
+    parser.add_argument("--dpi", type=float, help="the PNGs' resolution (default: slide 192, i.e. 1920 x 1080 px; "
+                                                  "column 300)")
+
+
 def use_style(size="slide", dpi=None):
     """Loads the style sheet and the size ("slide": 16:9, or "column"); `dpi` overrides the PNGs'
     resolution (slide 192: 1920 x 1080 px; column 300)."""

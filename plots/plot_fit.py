@@ -120,10 +120,7 @@ def plot_confidence(ax, fit, size):
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("folder", type=pathlib.Path, help="the folder of indentsim fit (fit.json, fit_curves.csv)")
-    parser.add_argument("--size", choices=ip.SIZES, default="slide",
-                        help="slide (16:9, default) or column (a journal column, 3.5 in wide)")
-    parser.add_argument("--dpi", type=float, help="the PNGs' resolution (default: slide 192, i.e. 1920 x 1080 px; "
-                                                  "column 300)")
+    ip.add_size_options(parser)
     args = parser.parse_args()
     ip.use_style(args.size, args.dpi)
     folder = args.folder

@@ -842,10 +842,7 @@ def main():
     parser.add_argument("--force-column", help="--data: the force column's header name")
     parser.add_argument("--depth-unit", help="--data: nm, um, mm or m (else from the header)")
     parser.add_argument("--force-unit", help="--data: mN, uN, nN or N (else from the header; N/m... in plane strain)")
-    parser.add_argument("--size", choices=ip.SIZES, default="slide",
-                        help="slide (16:9, default) or column (a journal column, 3.5 in wide)")
-    parser.add_argument("--dpi", type=float, help="the PNGs' resolution (default: slide 192, i.e. 1920 x 1080 px; "
-                                                  "column 300)")
+    ip.add_size_options(parser)
     args = parser.parse_args()
     ip.use_style(args.size, args.dpi)
     if args.analysis:

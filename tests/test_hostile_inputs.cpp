@@ -40,6 +40,15 @@ fs::path edited_checkpoint(const fs::path& good, const fs::path& file, const std
   return file;
 }
 
+/// A measured load-unload curve after `header` (its lines, the column names last): loading
+/// P = 2 k^2 to 100 nm, then 12 unloading rows P = 72 (k/12)^1.5, the columns split by `separator`.
+void write_measured_curve(const fs::path& file, const std::string& header, char separator) {
+  std::ofstream out(file);
+  out << header;
+  for (int k = 0; k <= 6; ++k) out << 20 * k << separator << 2.0 * k * k << "\n";
+  for (int k = 11; k >= 0; --k) out << 100 + 20.0 * k / 12 << separator << 72.0 * std::pow(k / 12.0, 1.5) << "\n";
+}
+
 }  // namespace
 
 // 3. resume DIR takes only checkpoints of the folder's own run, the newest by step, and says which.
@@ -317,11 +326,7 @@ TEST_F(Hostile, RunsOfDifferentCasesKeepTheirOwnFolders) {
 // An instrument's export: '#' comments, "Number of Points = N", a title line, tab-separated.
 TEST_F(Hostile, InstrumentHeadersWithCommentsAndMetadataLinesAreRead) {
   const fs::path file = dir_ / "hysitron.txt";
-  std::ofstream out(file);
-  out << "# exported by the instrument\nNumber of Points = 19\nSample A\n\nDepth (nm)\tLoad (uN)\n";
-  for (int k = 0; k <= 6; ++k) out << 20 * k << "\t" << 2.0 * k * k << "\n";
-  for (int k = 11; k >= 0; --k) out << 100 + 20.0 * k / 12 << "\t" << 72.0 * std::pow(k / 12.0, 1.5) << "\n";
-  out.close();
+  write_measured_curve(file, "# exported by the instrument\nNumber of Points = 19\nSample A\n\nDepth (nm)\tLoad (uN)\n", '\t');
   EXPECT_EQ(cli("analyze " + file.string() + " --set punch.shape=cone --set punch.half_angle=70.3"), 0) << err();
   EXPECT_EQ(err().find("error"), std::string::npos) << err();
 }
@@ -447,11 +452,7 @@ TEST_F(Hostile, MessagesNameTheKeyAndTheFieldThatAreWrong) {
   EXPECT_NE(err().find("g = \"nan\""), std::string::npos) << err();
   // Depth in nm declared as m: H of no solid, warned.
   const fs::path nm = dir_ / "nm.csv";
-  std::ofstream out(nm);
-  out << "Depth (m),Load (mN)\n";
-  for (int k = 0; k <= 6; ++k) out << 20 * k << "," << 2.0 * k * k << "\n";
-  for (int k = 11; k >= 0; --k) out << 100 + 20.0 * k / 12 << "," << 72.0 * std::pow(k / 12.0, 1.5) << "\n";
-  out.close();
+  write_measured_curve(nm, "Depth (m),Load (mN)\n", ',');
   EXPECT_EQ(cli("analyze " + nm.string() + " --set punch.shape=cone --set punch.half_angle=70.3"), 0) << err();
   EXPECT_NE(err().find("no solid's"), std::string::npos) << err();
 }

@@ -278,6 +278,7 @@ RunReport resume_run(const std::string& argument, const std::vector<std::string>
   if (!target.empty()) all.push_back("output.dir=" + toml_string(target));
   ResumedRun run = resume_from(checkpoint, file.string(), all);  // everything checked before writing
   const LoadCase stored = parse_load_case(checkpoint.load_case_toml, file.string());
+  const LoadCase as_run = case_as_run(run.load_case, run.simulation->configuration());  // case.toml's
   const fs::path dir = run.load_case.output.dir;
   const bool in_place = fs::equivalent(dir, home.empty() ? fs::path(stored.output.dir) : home, ec);
   if (in_place) {
@@ -290,7 +291,7 @@ RunReport resume_run(const std::string& argument, const std::vector<std::string>
                                    dir.string()));
     if (fs::is_regular_file(dir / "case.toml", ec)) {
       const LoadCase folder_case = read_load_case(dir / "case.toml");
-      if (!same_run(folder_case, case_as_run(run.load_case, run.simulation->configuration())))
+      if (!same_run(folder_case, as_run))
         throw InputError(file.string(), "--out",
                          fmt::format("\"{}\" now holds another run; give the continuation its own folder with --out",
                                      dir.string()));
@@ -303,7 +304,6 @@ RunReport resume_run(const std::string& argument, const std::vector<std::string>
   // The companions are run again (they are cheap and not checkpointed), before anything is written.
   const auto estimate = estimate_error(*run.simulation, observer);
   folder.clear_earlier_run(in_place ? std::optional<int>(step) : std::nullopt);
-  const LoadCase as_run = case_as_run(run.load_case, run.simulation->configuration());
   RunOutput output(folder.dir(), as_run, estimate.get(), checkpoint.curve, checkpoint.free_surface_depths);
   output.set_configuration(run.simulation->configuration());
   output.restore_true_contacts(checkpoint.true_contacts);

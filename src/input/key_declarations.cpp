@@ -356,7 +356,8 @@ const std::vector<KeyDeclaration>& key_declarations() {
                           "written by case.toml: the pilot run's plastic zone as it grew with the depth h (sizes the "
                           "condensed near field); with contact_half_width, the run needs no pilot"};
       zone.default_words = "none: measured by the pilot";
-      zone.read = [](const Reader& r, LoadCase& lc) { r.read_triples("mesh", "plastic_zone", lc.mesh.plastic_zone); };
+      zone.read = [](const Reader& r, LoadCase& lc) { r.read_tuples("mesh", "plastic_zone", "[h, width, depth] triples", "a triple [h, width, depth]",
+                      lc.mesh.plastic_zone); };
       zone.write = [](const LoadCase& lc) -> std::optional<std::string> {
         if (lc.mesh.plastic_zone.empty()) return std::nullopt;
         std::string text = "[";

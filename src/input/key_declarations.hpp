@@ -287,49 +287,39 @@ public:
     }
   }
 
-  /// punch.profile_points: an array of [r, g] pairs.
-  void read_points(const std::string& section, const std::string& key,
-                   std::vector<std::pair<double, double>>& target) const {
+  /// An array of N-number tuples, each read as doubles: `plural` names the array's elements
+  /// ("[r, g] pairs"), `one` one of them ("a pair [r, g]").
+  template <std::size_t N>
+  void read_tuples(const std::string& section, const std::string& key, const char* plural, const char* one,
+                   std::vector<std::array<double, N>>& target) const {
     const toml::node* node = find(section, key);
     if (!node) return;
     const toml::array* array = node->as_array();
     const std::string where = section + "." + key;
-    if (!array) fail(where, fmt::format("expected an array of [r, g] pairs, got {}", type_name(*node)));
+    if (!array) fail(where, fmt::format("expected an array of {}, got {}", plural, type_name(*node)));
     target.clear();
     for (std::size_t i = 0; i < array->size(); ++i) {
-      const toml::array* pair = array->get(i)->as_array();
-      if (!pair || pair->size() != 2) fail(where, fmt::format("element {} is not a pair [r, g]", i));
-      double values[2];
-      for (std::size_t c = 0; c < 2; ++c) {
-        const toml::node& item = *pair->get(c);
-        if (auto v = item.value_exact<double>()) values[c] = *v;
-        else if (auto n = item.value_exact<int64_t>()) values[c] = static_cast<double>(*n);
-        else fail(where, fmt::format("element {} holds {}, expected numbers", i, type_name(item)));
-      }
-      target.emplace_back(values[0], values[1]);
-    }
-  }
-
-  /// An array of [h, width, depth] triples (mesh.plastic_zone).
-  void read_triples(const std::string& section, const std::string& key, std::vector<std::array<double, 3>>& target) const {
-    const toml::node* node = find(section, key);
-    if (!node) return;
-    const toml::array* array = node->as_array();
-    const std::string where = section + "." + key;
-    if (!array) fail(where, fmt::format("expected an array of [h, width, depth] triples, got {}", type_name(*node)));
-    target.clear();
-    for (std::size_t i = 0; i < array->size(); ++i) {
-      const toml::array* triple = array->get(i)->as_array();
-      if (!triple || triple->size() != 3) fail(where, fmt::format("element {} is not a triple [h, width, depth]", i));
-      std::array<double, 3> values{};
-      for (std::size_t c = 0; c < 3; ++c) {
-        const toml::node& item = *triple->get(c);
+      const toml::array* tuple = array->get(i)->as_array();
+      if (!tuple || tuple->size() != N) fail(where, fmt::format("element {} is not {}", i, one));
+      std::array<double, N> values{};
+      for (std::size_t c = 0; c < N; ++c) {
+        const toml::node& item = *tuple->get(c);
         if (auto v = item.value_exact<double>()) values[c] = *v;
         else if (auto n = item.value_exact<int64_t>()) values[c] = static_cast<double>(*n);
         else fail(where, fmt::format("element {} holds {}, expected numbers", i, type_name(item)));
       }
       target.push_back(values);
     }
+  }
+
+  /// punch.profile_points: an array of [r, g] pairs.
+  void read_points(const std::string& section, const std::string& key,
+                   std::vector<std::pair<double, double>>& target) const {
+    if (!find(section, key)) return;
+    std::vector<std::array<double, 2>> pairs;
+    read_tuples(section, key, "[r, g] pairs", "a pair [r, g]", pairs);
+    target.clear();
+    for (const auto& [r, g] : pairs) target.emplace_back(r, g);
   }
 
   const std::string& source() const { return source_; }
