@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "indentsim/materials/material.hpp"
 #include "indentsim/output/checkpoint.hpp"
 #include "indentsim/base/error.hpp"
 #include "indentsim/simulation/simulation.hpp"
@@ -146,6 +147,108 @@ TEST_F(Hostile, EditedCheckpointsWithAValidChecksumAreRefused) {
     EXPECT_NE(err().find(name), std::string::npos) << err();
     EXPECT_FALSE(fs::exists(dir_ / "never"));
   }
+}
+
+// 2. A forged state, its checksum and case hash recomputed, is refused by what the state proves of
+// itself: Newton's residual at its displacement, the previous state, each Gauss point's history
+// within its law and consistent with the committed strain, and the last row recomputed from it.
+TEST_F(Hostile, ForgedStatesWithAValidChecksumAreRefusedByWhatTheStateProves) {
+  const auto run_to = [&](const std::string& name, const std::string& options) {
+    const fs::path run = dir_ / name;
+    EXPECT_EQ(cli("run " + options + " --quiet --set mesh.contact_nodes=6 --out " + run.string()), 0) << err();
+    return run / "checkpoints";
+  };
+  // Ilyushin, at the end of its loading (12 increments); J2 on the unloading branch (row 14).
+  const fs::path ilyushin = run_to("ilyushin", source_path("loadcases/deep_plastic.toml") +
+                                                   " --set load.increments=12 --set output.checkpoint_every=12") /
+                            "checkpoint_000012.ck";
+  const fs::path j2 = run_to("j2", source_path("loadcases/load_unload.toml") +
+                                       " --set load.increments=[8,8,4] --set output.checkpoint_every=14 "
+                                       "--set output.keep_checkpoints='\"all\"'") /
+                      "checkpoint_000014.ck";
+  // The first Gauss point that has yielded, and where its history starts (after the bulk model's
+  // yielded count and largest intensity, and Ilyushin's loading flag).
+  const auto yielded_point = [](const Checkpoint& c, std::size_t head, std::size_t value) {
+    const std::vector<double>& h = c.state.history;
+    for (std::size_t at = head; at + 5 <= h.size(); at += 5)
+      if (h[at + value] > 1e-3) return at;
+    ADD_FAILURE() << "no yielded point";
+    return head;
+  };
+  const auto ilyushin_point = [&](const Checkpoint& c) { return yielded_point(c, 3, 4); };
+  const auto j2_point = [&](const Checkpoint& c) { return yielded_point(c, 2, 4); };
+  struct Forgery {
+    const char* name;
+    const fs::path* good;
+    std::function<void(Checkpoint&)> edit;
+    std::vector<const char*> says;  ///< the reason given (one of these: the first check that fails)
+  };
+  const Forgery forgeries[] = {
+      {"kappa.ck", &ilyushin,
+       [](Checkpoint& c) {
+         const std::size_t at = c.load_case_toml.find("kappa = ");
+         ASSERT_NE(at, std::string::npos);
+         c.load_case_toml.replace(at, c.load_case_toml.find('\n', at) - at, "kappa = 0.9");
+       },
+       {"not a converged one", "contact set does not follow"}},
+      {"u_node.ck", &ilyushin, [](Checkpoint& c) { c.state.u[c.state.u.size() / 2] *= 1.001; },
+       {"not a converged one", "committed strain"}},
+      {"u_previous_zeroed.ck", &ilyushin,
+       [](Checkpoint& c) { std::fill(c.state.u_previous.begin(), c.state.u_previous.end(), 0.0); },
+       {"previous displacement"}},
+      {"alpha_previous.ck", &ilyushin, [](Checkpoint& c) { c.state.alpha_previous *= 0.5; }, {"previous depth"}},
+      {"peak_intensity.ck", &ilyushin, [&](Checkpoint& c) { c.state.history[ilyushin_point(c) + 4] *= 2.0; },
+       {"peak strain intensity"}},
+      {"peak_strain.ck", &ilyushin,
+       [&](Checkpoint& c) {
+         const std::size_t p = ilyushin_point(c);
+         std::vector<double>& h = c.state.history;
+         for (std::size_t k = 0; k < 4; ++k) h[p + k] *= 1.1;
+         h[p + 4] = strain_intensity(VoigtVector(h[p], h[p + 1], h[p + 2], h[p + 3]));  // kept consistent
+       },
+       {"committed strain"}},
+      {"yielded_count.ck", &ilyushin, [](Checkpoint& c) { c.state.history[0] += 1.0; }, {"yielded Gauss points"}},
+      {"contact_width.ck", &ilyushin, [](Checkpoint& c) { c.curve.back().half_width *= 3.0; }, {"last curve row"}},
+      {"free_surface.ck", &ilyushin, [](Checkpoint& c) { c.free_surface_depths.back() *= 0.5; }, {"free surface"}},
+      {"plastic_strain.ck", &j2, [&](Checkpoint& c) { c.state.history[j2_point(c)] *= 2.0; }, {"plastic strain"}},
+      {"plastic_path_shortened.ck", &j2, [&](Checkpoint& c) { c.state.history[j2_point(c) + 4] *= 0.5; },
+       {"material history"}},
+      {"j2_kappa.ck", &j2,
+       [](Checkpoint& c) {
+         const std::size_t at = c.load_case_toml.find("kappa = ");
+         ASSERT_NE(at, std::string::npos);
+         c.load_case_toml.replace(at, c.load_case_toml.find('\n', at) - at, "kappa = 0.98");
+       },
+       {"not a converged one", "yield surface"}},
+  };
+  for (const Forgery& f : forgeries) {
+    SCOPED_TRACE(f.name);
+    const fs::path file = edited_checkpoint(*f.good, dir_ / f.name, f.edit);
+    EXPECT_EQ(cli("resume " + file.string() + " --quiet --out " + (dir_ / "never").string()), 2) << err();
+    EXPECT_NE(err().find(f.name), std::string::npos) << err();
+    EXPECT_TRUE(std::any_of(f.says.begin(), f.says.end(),
+                            [&](const char* reason) { return err().find(reason) != std::string::npos; }))
+        << err();
+    EXPECT_FALSE(fs::exists(dir_ / "never"));
+  }
+  // The untouched checkpoints resume.
+  for (const fs::path* good : {&ilyushin, &j2})
+    EXPECT_EQ(cli("resume " + good->string() + " --quiet --out " + (dir_ / good->stem()).string()), 0) << err();
+}
+
+// 2. The state check measures a checkpoint's residual as the run that converged it did: a branch
+// to a path five times shallower (a force scale five times smaller) still resumes.
+TEST_F(Hostile, ABranchToAShallowerPathResumesFromTheCheckpointOfADeeperRun) {
+  const fs::path run = dir_ / "deep";
+  ASSERT_EQ(cli("run " + source_path("loadcases/deep_plastic.toml") +
+                " --quiet --set mesh.contact_nodes=6 --set load.path=[0,1e-5,5e-5] --set load.increments=[2,6] "
+                "--set output.checkpoint_every=2 --set output.keep_checkpoints='\"all\"' --out " + run.string()),
+            0)
+      << err();
+  EXPECT_EQ(cli("resume " + (run / "checkpoints" / "checkpoint_000002.ck").string() +
+                " --quiet --set load.path=[0,1e-5,0] --set load.increments=[2,2] --out " + (dir_ / "branch").string()),
+            0)
+      << err();
 }
 
 // 7. Every key given is validated, whatever the model.

@@ -11,6 +11,64 @@
 
 namespace indentsim {
 
+namespace {
+
+// What a checkpoint's state can prove about itself, checked before a run continues from it (a file
+// edited with its checksum recomputed passes the byte format's checks).  The material history was
+// checked point by point against the committed strains by Simulation::restore.  The state must be
+// a converged one: Newton's residual at u, recomputed on the whole mesh, within the tolerance the
+// run converges to (measured on every checkpoint of the shipped cases at 0.92 of it at most;
+// twice the tolerance leaves room for rounding in the recomputation, and no edit of u, of the
+// history or of the embedded case's material that moves a nodal force by more than that passes).
+// The residual is scaled as the run that converged the state scaled it (its own planned depth,
+// which a branch's shallower path would shrink).  The previous state, the predictor's, is checked as far as it can be: a model without history
+// must be in equilibrium there too; an inelastic one, whose history has moved on since, must at
+// least touch without penetrating.  The curve's last row and its free-surface depth follow from
+// u.  Earlier rows cannot be recomputed without solving the increments again: they are trusted.
+template <class Fail>
+void check_restored_state(const Simulation& sim, const Checkpoint& c, double planned_depth, const Fail& fail) {
+  const double tolerance = sim.load_case().solver.tolerance;
+  const double residual = sim.equilibrium_residual(planned_depth);
+  if (!(residual <= 2.0 * tolerance))
+    fail(fmt::format("its state is not a converged one: Newton's scaled residual there is {:.3g}, where the run "
+                     "converges every increment to {:g} (was its displacement, material history or load case "
+                     "changed after it was written?)",
+                     residual, tolerance));
+  const SimulationState& state = c.state;
+  const std::size_t rows = c.curve.size();
+  if (state.has_previous) {
+    const double before = rows >= 2 ? c.curve[rows - 2].alpha : 0.0;
+    const bool between = (state.alpha_previous - before) * (state.alpha - state.alpha_previous) >= 0.0;
+    const bool previous_row = c.curve.back().cutbacks == 0;  // one commit since the row before
+    if (previous_row ? state.alpha_previous != before : !between)
+      fail(fmt::format("its previous depth {:.10g} m is not {} (rows at {:.10g} and {:.10g} m)", state.alpha_previous,
+                       previous_row ? "the previous row's" : "between the last two rows'", before, state.alpha));
+    const double previous = sim.previous_state_residual(planned_depth);
+    if (!(previous <= 2.0 * tolerance))
+      fail(fmt::format("its previous displacement is not a converged state at alpha = {:.10g} m (scaled residual "
+                       "{:.3g}, tolerance {:g})",
+                       state.alpha_previous, previous, tolerance));
+  }
+  const ContactResult contact = sim.contact();
+  const IncrementRecord& last = c.curve.back();
+  double largest = 0.0;
+  for (const auto& r : c.curve) largest = std::max(largest, r.force);
+  if (std::abs(contact.force - last.force) > 1e-9 * largest || contact.contact_nodes != last.contact_nodes)
+    fail(fmt::format("its last curve row (P = {:.10g}, {} contact nodes) is not what its state gives (P = {:.10g}, "
+                     "{} contact nodes)",
+                     last.force, last.contact_nodes, contact.force, contact.contact_nodes));
+  // The same functions of the same doubles as when the row was written: equal to the last bit.
+  const double half_width = sim.contact_half_width(), surface = sim.free_surface_depth();
+  if (half_width != last.half_width || sim.bulk().plastic_points() != last.plastic_points ||
+      sim.bulk().max_strain_intensity() != last.max_strain_intensity || surface != c.free_surface_depths.back())
+    fail(fmt::format("its last curve row (a = {:.10g} m, {} plastic points, e_u max {:.10g}, free surface at "
+                     "{:.10g} m) is not what its state gives ({:.10g} m, {}, {:.10g}, {:.10g} m)",
+                     last.half_width, last.plastic_points, last.max_strain_intensity, c.free_surface_depths.back(),
+                     half_width, sim.bulk().plastic_points(), sim.bulk().max_strain_intensity(), surface));
+}
+
+}  // namespace
+
 Checkpoint make_checkpoint(const Simulation& sim, const std::vector<IncrementRecord>& curve,
                            const std::vector<double>& free_surface_depths,
                            const std::vector<std::pair<int, TrueContact>>& true_contacts) {
@@ -72,16 +130,7 @@ ResumedRun resume_from(const Checkpoint& c, const std::string& source, const std
   } catch (const std::invalid_argument& e) {
     fail(std::string("its state does not fit its load case: ") + e.what());
   }
-  // The curve's last row must be what the state gives: the force and the contact set follow from
-  // the displacement.
-  const ContactResult contact = run.simulation->contact();
-  const IncrementRecord& last = c.curve.back();
-  double largest = 0.0;
-  for (const auto& r : c.curve) largest = std::max(largest, r.force);
-  if (std::abs(contact.force - last.force) > 1e-9 * largest || contact.contact_nodes != last.contact_nodes)
-    fail(fmt::format("its last curve row (P = {:.10g}, {} contact nodes) is not what its state gives (P = {:.10g}, "
-                     "{} contact nodes)",
-                     last.force, last.contact_nodes, contact.force, contact.contact_nodes));
+  check_restored_state(*run.simulation, c, stored.max_depth(), fail);
   return run;
 }
 

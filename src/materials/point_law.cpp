@@ -1,7 +1,10 @@
 #include "indentsim/materials/point_law.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
+
+#include <fmt/format.h>
 
 namespace indentsim {
 
@@ -86,6 +89,20 @@ void IlyushinPointLaw::restore(const std::vector<double>& h) {
   }
 }
 
+std::string IlyushinPointLaw::restored_inconsistency(std::size_t point, const VoigtVector& strain) const {
+  const VoigtVector& peak = peak_strain_[point];
+  const double intensity = peak_intensity_[point];
+  if (!(intensity >= 0.0) || !std::isfinite(intensity) || !peak.allFinite())
+    return fmt::format("a peak strain intensity {:g} is no strain intensity", intensity);
+  // Both are written by commit() from the same strain, so they agree to the last bit.
+  if (intensity != strain_intensity(peak))
+    return fmt::format("a peak strain intensity {:.17g} is not that of its peak strain ({:.17g})", intensity,
+                       strain_intensity(peak));
+  if (loading_ && peak != strain)
+    return "a peak strain is not the committed strain although the load path is at its deepest point";
+  return {};
+}
+
 // ---------------------------------------------------------------------------------------------
 J2PointLaw::J2PointLaw(const J2Law& law, std::size_t points)
     : law_(law), initial_yield_(law.curve().stress_intensity(law.curve().elastic_limit())), state_(points) {}
@@ -131,6 +148,28 @@ void J2PointLaw::restore(const std::vector<double>& h) {
     state_[p].plastic_strain = Eigen::Vector4d(h[5 * p], h[5 * p + 1], h[5 * p + 2], h[5 * p + 3]);
     state_[p].equivalent_plastic_strain = h[5 * p + 4];
   }
+}
+
+std::string J2PointLaw::restored_inconsistency(std::size_t point, const VoigtVector& strain) const {
+  const J2State& s = state_[point];
+  const double path = s.equivalent_plastic_strain;
+  if (!(path >= 0.0) || !std::isfinite(path) || !s.plastic_strain.allFinite())
+    return fmt::format("an equivalent plastic strain {:g} is no accumulated plastic strain", path);
+  const Eigen::Vector4d& p = s.plastic_strain;  // tensor components (11, 22, 33, 12)
+  const double norm = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2] + 2.0 * p[3] * p[3]);
+  // Rounding: each return adds a deviator to ~1e-16 of its size; 1e-9 leaves room for 10^7 returns.
+  if (std::abs(p[0] + p[1] + p[2]) > 1e-9 * path)
+    return "a plastic strain is not a deviator (plastic flow keeps the volume)";
+  if (norm > std::sqrt(1.5) * path * (1.0 + 1e-9))
+    return fmt::format("a plastic strain of norm {:g} is longer than the path its equivalent plastic strain {:g} "
+                       "allows (|eps_p| <= sqrt(3/2) eps_p_bar)",
+                       norm, path);
+  const J2Response again = law_.respond(strain, s);
+  if (again.state.equivalent_plastic_strain - path > 1e-9 * std::max(path, law_.curve().elastic_limit()))
+    return fmt::format("the committed strain lies outside the yield surface of its history (a converged state "
+                       "would have returned {:g} more equivalent plastic strain)",
+                       again.state.equivalent_plastic_strain - path);
+  return {};
 }
 
 }  // namespace indentsim

@@ -127,9 +127,17 @@ IncrementRecord Simulation::advance_to(double target) {
   // The state of the last reported increment, saved before a converged sub-step (after a
   // cutback) moves the simulation past it: an interruption returns to it.
   std::optional<SimulationState> reported;
+  // An increment that ends without a row (a signal, or no convergence) leaves the run at its last
+  // reported state, which a checkpoint and the final fields then show: the sub-steps' commits
+  // undone, and the law's branch that of the committed state (Ilyushin's loading flag is set for
+  // each trial: committed, it is alpha >= deepest).
+  const auto return_to_reported = [&] {
+    if (reported) restore(*reported);
+    else if (plastic_) plastic_->set_loading(state_.alpha >= state_.deepest);
+  };
   const auto stop_if_requested = [&] {
     if (const int signal = interruption_requested()) {
-      if (reported) restore(*reported);
+      return_to_reported();
       throw Interrupted(signal);
     }
   };
@@ -153,7 +161,8 @@ IncrementRecord Simulation::advance_to(double target) {
       continue;
     }
     if (cutbacks >= load_case_.solver.max_cutbacks) {
-      const NewtonReport& report = last_report_;
+      const NewtonReport report = last_report_;
+      return_to_reported();
       throw SolverError(fmt::format(
           "the increment from alpha = {:.6g} m to {:.6g} m did not converge after {} cutbacks (last try: "
           "alpha = {:.6g} m, {} Newton iterations, scaled residual {:.3g}, KINSOL flag {}{}{})",
@@ -344,6 +353,41 @@ ContactResult Simulation::contact() const {
   std::vector<double> internal_force(state_.u.size());
   bulk_->internal_force(state_.u.data(), internal_force.data());
   return evaluate_contact(*contact_, state_.u.data(), internal_force.data(), state_.alpha);
+}
+
+namespace {
+
+// Largest |f_i| over the force scale (an edited non-finite value counts as infinite).
+double scaled_max(const std::vector<double>& f, double force_scale) {
+  double largest = 0.0;
+  for (double fi : f) largest = std::max(largest, std::abs(fi));
+  return std::isfinite(largest) ? largest / force_scale : std::numeric_limits<double>::infinity();
+}
+
+}  // namespace
+
+double Simulation::equilibrium_residual(double planned_depth) const {
+  std::vector<double> f(state_.u.size());
+  bulk_->internal_force(state_.u.data(), f.data());
+  for (const auto& c : contact_->candidates())
+    f[c.equation] = ContactBoundary::complementarity(c, f[c.equation], state_.u[c.equation], state_.alpha);
+  return scaled_max(f, settings_.force_scale * planned_depth / load_case_.max_depth());
+}
+
+double Simulation::previous_state_residual(double planned_depth) const {
+  const std::vector<double>& u = state_.u_previous;
+  const double alpha = state_.alpha_previous;
+  std::vector<double> f;
+  if (plastic_) {
+    for (const auto& c : contact_->candidates())
+      f.push_back(std::max(0.0, c.scale * ContactBoundary::penetration(c, u[c.equation], alpha)));
+  } else {
+    f.resize(u.size());
+    bulk_->internal_force(u.data(), f.data());
+    for (const auto& c : contact_->candidates())
+      f[c.equation] = ContactBoundary::complementarity(c, f[c.equation], u[c.equation], alpha);
+  }
+  return scaled_max(f, settings_.force_scale * planned_depth / load_case_.max_depth());
 }
 
 IncrementSnapshot Simulation::snapshot(const IncrementRecord& record) const {

@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <map>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include <Eigen/StdVector>
@@ -55,6 +56,10 @@ public:
   /// The carried state of every point, flattened, and its restoration (checkpoints).
   virtual std::vector<double> history() const = 0;
   virtual void restore(const std::vector<double>& history) = 0;
+  /// After restore: an empty string when the point's history is one the law can carry at the
+  /// committed `strain` (within the law's bounds, and what committing that strain would leave),
+  /// else what is wrong.  A checkpoint's history is checked so before a run continues from it.
+  virtual std::string restored_inconsistency(std::size_t point, const VoigtVector& strain) const = 0;
 };
 
 /// Ilyushin's deformation theory.  Without unloading rule: the secant law, path independent.
@@ -86,6 +91,8 @@ public:
   void set_loading(bool beyond_previous_peak) override { loading_ = !unloading_rule_ || beyond_previous_peak; }
   std::vector<double> history() const override;
   void restore(const std::vector<double>& history) override;
+  /// The peak intensity is e_u of the peak strain; while loading, the peak is the committed strain.
+  std::string restored_inconsistency(std::size_t point, const VoigtVector& strain) const override;
   const IlyushinLaw& law() const { return law_; }
 
 private:
@@ -109,6 +116,11 @@ public:
   bool has_yielded(std::size_t point) const override { return state_[point].equivalent_plastic_strain > 0.0; }
   std::vector<double> history() const override;
   void restore(const std::vector<double>& history) override;
+  /// The plastic strain is a deviator no longer than the path it accumulated along,
+  /// |eps_p| <= sqrt(3/2) eps_p_bar (every return adds sqrt(3/2) dgamma n, |n| = 1), and the
+  /// committed strain's trial stress lies on or inside the yield surface of eps_p_bar (a
+  /// converged state returns no further plastic strain).
+  std::string restored_inconsistency(std::size_t point, const VoigtVector& strain) const override;
 
 private:
   J2Law law_;

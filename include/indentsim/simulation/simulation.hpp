@@ -75,6 +75,19 @@ public:
   /// simulation moves on.
   IncrementSnapshot snapshot(const IncrementRecord& record) const;
 
+  /// Newton's measure of how far the current state is from equilibrium, on the whole mesh: the
+  /// largest |F_i(u)| over the force scale, F the bulk's internal force with each contact row
+  /// replaced by its complementarity function (the residual the Newton iterations drive below
+  /// solver.tolerance).  The force scale is that of a load path whose deepest depth is
+  /// `planned_depth` (a resumed branch may plan a shallower path than the run that converged the
+  /// state; the scale is proportional to the depth).
+  double equilibrium_residual(double planned_depth) const;
+  /// The same measure for the previous converged state (u_previous at alpha_previous), as far as
+  /// the current state allows: the whole residual for a model without history; for an inelastic
+  /// model, whose history has moved on since, only the contact rows' kinematic part (no surface
+  /// node past the punch, scale * penetration).
+  double previous_state_residual(double planned_depth) const;
+
   double alpha() const { return state_.alpha; }
   const std::vector<double>& displacement() const { return state_.u; }
   ContactResult contact() const;
