@@ -112,7 +112,7 @@ TEST(Checkpoint, EveryFieldOfTheRunStateSurvivesTheFile) {
     return fields;
   };
   const auto before = describe(s);
-  EXPECT_EQ(before.size(), 14u);
+  EXPECT_EQ(before.size(), 16u);
   const auto after = describe(deserialize(serialize(c), "memory").state);
   for (const auto& [name, text] : before) EXPECT_EQ(after.at(name), text) << name;
 }

@@ -14,26 +14,29 @@ namespace indentsim {
 namespace {
 
 // What a checkpoint's state can prove about itself, checked before a run continues from it (a file
-// edited with its checksum recomputed passes the byte format's checks).  The material history was
-// checked point by point against the committed strains by Simulation::restore.  The state must be
-// a converged one: Newton's residual at u, recomputed on the whole mesh, within the tolerance the
-// run converges to (measured on every checkpoint of the shipped cases at 0.92 of it at most;
-// twice the tolerance leaves room for rounding in the recomputation, and no edit of u, of the
-// history or of the embedded case's material that moves a nodal force by more than that passes).
-// The residual is scaled as the run that converged the state scaled it (its own planned depth,
-// which a branch's shallower path would shrink).  The previous state, the predictor's, is checked as far as it can be: a model without history
-// must be in equilibrium there too; an inelastic one, whose history has moved on since, must at
-// least touch without penetrating.  The curve's last row and its free-surface depth follow from
-// u.  Earlier rows cannot be recomputed without solving the increments again: they are trusted.
+// edited with its checksum recomputed passes the byte format's checks):
+// - it is a converged state: the Newton system's residual at u, on the force scale u converged on,
+//   within the tolerance the run converges to.  Recomputed from the same doubles it is the
+//   residual Newton accepted, up to rounding in the recomputation (measured at 0.92 of the
+//   tolerance at most on every checkpoint of the shipped cases): twice the tolerance leaves room
+//   for that, and no edit of u, of the history or of the embedded case's material that moves a
+//   nodal force by more than that passes;
+// - every Gauss point's history is one its law can carry at the committed strain;
+// - the previous state (the predictor's), as far as it can be checked: a model without history
+//   must be in equilibrium there too; an inelastic one, whose history has moved on since, must at
+//   least touch the punch without penetrating it;
+// - the curve's last row and its free-surface depth follow from u.
+// Earlier rows cannot be recomputed without solving the increments again: they are trusted.
 template <class Fail>
-void check_restored_state(const Simulation& sim, const Checkpoint& c, double planned_depth, const Fail& fail) {
+void check_restored_state(Simulation& sim, const Checkpoint& c, const Fail& fail) {
   const double tolerance = sim.load_case().solver.tolerance;
-  const double residual = sim.equilibrium_residual(planned_depth);
+  const double residual = sim.equilibrium_residual();
   if (!(residual <= 2.0 * tolerance))
     fail(fmt::format("its state is not a converged one: Newton's scaled residual there is {:.3g}, where the run "
                      "converges every increment to {:g} (was its displacement, material history or load case "
                      "changed after it was written?)",
                      residual, tolerance));
+  if (const auto violation = sim.bulk().history_violation()) fail("its material history: " + *violation);
   const SimulationState& state = c.state;
   const std::size_t rows = c.curve.size();
   if (state.has_previous) {
@@ -43,7 +46,7 @@ void check_restored_state(const Simulation& sim, const Checkpoint& c, double pla
     if (previous_row ? state.alpha_previous != before : !between)
       fail(fmt::format("its previous depth {:.10g} m is not {} (rows at {:.10g} and {:.10g} m)", state.alpha_previous,
                        previous_row ? "the previous row's" : "between the last two rows'", before, state.alpha));
-    const double previous = sim.previous_state_residual(planned_depth);
+    const double previous = sim.previous_state_residual();
     if (!(previous <= 2.0 * tolerance))
       fail(fmt::format("its previous displacement is not a converged state at alpha = {:.10g} m (scaled residual "
                        "{:.3g}, tolerance {:g})",
@@ -130,7 +133,7 @@ ResumedRun resume_from(const Checkpoint& c, const std::string& source, const std
   } catch (const std::invalid_argument& e) {
     fail(std::string("its state does not fit its load case: ") + e.what());
   }
-  check_restored_state(*run.simulation, c, stored.max_depth(), fail);
+  check_restored_state(*run.simulation, c, fail);
   return run;
 }
 

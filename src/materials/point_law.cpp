@@ -89,7 +89,7 @@ void IlyushinPointLaw::restore(const std::vector<double>& h) {
   }
 }
 
-std::string IlyushinPointLaw::restored_inconsistency(std::size_t point, const VoigtVector& strain) const {
+std::optional<std::string> IlyushinPointLaw::history_violation(std::size_t point, const VoigtVector& strain) const {
   const VoigtVector& peak = peak_strain_[point];
   const double intensity = peak_intensity_[point];
   if (!(intensity >= 0.0) || !std::isfinite(intensity) || !peak.allFinite())
@@ -100,7 +100,7 @@ std::string IlyushinPointLaw::restored_inconsistency(std::size_t point, const Vo
                        strain_intensity(peak));
   if (loading_ && peak != strain)
     return "a peak strain is not the committed strain although the load path is at its deepest point";
-  return {};
+  return std::nullopt;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -150,26 +150,31 @@ void J2PointLaw::restore(const std::vector<double>& h) {
   }
 }
 
-std::string J2PointLaw::restored_inconsistency(std::size_t point, const VoigtVector& strain) const {
+namespace {
+// Relative rounding a J2 history may carry: each return adds a deviator exact to ~1e-16 of its
+// size, so 1e-9 leaves room for 10^7 returns and still refuses any edit a reader would notice.
+constexpr double accumulated_rounding = 1e-9;
+}  // namespace
+
+std::optional<std::string> J2PointLaw::history_violation(std::size_t point, const VoigtVector& strain) const {
   const J2State& s = state_[point];
   const double path = s.equivalent_plastic_strain;
   if (!(path >= 0.0) || !std::isfinite(path) || !s.plastic_strain.allFinite())
     return fmt::format("an equivalent plastic strain {:g} is no accumulated plastic strain", path);
   const Eigen::Vector4d& p = s.plastic_strain;  // tensor components (11, 22, 33, 12)
   const double norm = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2] + 2.0 * p[3] * p[3]);
-  // Rounding: each return adds a deviator to ~1e-16 of its size; 1e-9 leaves room for 10^7 returns.
-  if (std::abs(p[0] + p[1] + p[2]) > 1e-9 * path)
+  if (std::abs(p[0] + p[1] + p[2]) > accumulated_rounding * path)
     return "a plastic strain is not a deviator (plastic flow keeps the volume)";
-  if (norm > std::sqrt(1.5) * path * (1.0 + 1e-9))
+  if (norm > std::sqrt(1.5) * path * (1.0 + accumulated_rounding))
     return fmt::format("a plastic strain of norm {:g} is longer than the path its equivalent plastic strain {:g} "
                        "allows (|eps_p| <= sqrt(3/2) eps_p_bar)",
                        norm, path);
   const J2Response again = law_.respond(strain, s);
-  if (again.state.equivalent_plastic_strain - path > 1e-9 * std::max(path, law_.curve().elastic_limit()))
+  if (again.state.equivalent_plastic_strain - path > accumulated_rounding * std::max(path, law_.curve().elastic_limit()))
     return fmt::format("the committed strain lies outside the yield surface of its history (a converged state "
                        "would have returned {:g} more equivalent plastic strain)",
                        again.state.equivalent_plastic_strain - path);
-  return {};
+  return std::nullopt;
 }
 
 }  // namespace indentsim

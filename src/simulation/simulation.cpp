@@ -98,6 +98,7 @@ void Simulation::build(const RunConfiguration& configuration, const std::optiona
   build_system();
 
   state_.u.assign(static_cast<std::size_t>(mesh_->equations()), 0.0);
+  state_.residual_scale = settings_.force_scale;  // u = 0 at alpha = 0 is in equilibrium on any scale
 
   const std::vector<std::string> implausible = plausibility_warnings(load_case_, plan);
   state_.warnings.insert(state_.warnings.end(), implausible.begin(), implausible.end());
@@ -133,7 +134,7 @@ IncrementRecord Simulation::advance_to(double target) {
   // each trial: committed, it is alpha >= deepest).
   const auto return_to_reported = [&] {
     if (reported) restore(*reported);
-    else if (plastic_) plastic_->set_loading(state_.alpha >= state_.deepest);
+    else if (plastic_) plastic_->set_loading(state_.alpha >= state_.deepest);  // as restore() sets it
   };
   const auto stop_if_requested = [&] {
     if (const int signal = interruption_requested()) {
@@ -161,7 +162,7 @@ IncrementRecord Simulation::advance_to(double target) {
       continue;
     }
     if (cutbacks >= load_case_.solver.max_cutbacks) {
-      const NewtonReport report = last_report_;
+      const NewtonReport report = last_report_;  // a copy: returning to the reported state may rebuild the system
       return_to_reported();
       throw SolverError(fmt::format(
           "the increment from alpha = {:.6g} m to {:.6g} m did not converge after {} cutbacks (last try: "
@@ -212,6 +213,8 @@ bool Simulation::solve_at(double trial, SolveCounters& counters, const std::func
 void Simulation::commit(double trial) {
   state_.u_previous.swap(state_.u);
   state_.u.swap(guess_);
+  state_.residual_scale_previous = state_.residual_scale;
+  state_.residual_scale = settings_.force_scale;
   state_.alpha_previous = state_.alpha;
   state_.alpha = trial;
   state_.has_previous = true;
@@ -366,28 +369,26 @@ double scaled_max(const std::vector<double>& f, double force_scale) {
 
 }  // namespace
 
-double Simulation::equilibrium_residual(double planned_depth) const {
-  std::vector<double> f(state_.u.size());
-  bulk_->internal_force(state_.u.data(), f.data());
-  for (const auto& c : contact_->candidates())
-    f[c.equation] = ContactBoundary::complementarity(c, f[c.equation], state_.u[c.equation], state_.alpha);
-  return scaled_max(f, settings_.force_scale * planned_depth / load_case_.max_depth());
+double Simulation::equilibrium_residual() {
+  return system_residual(state_.u, state_.alpha, state_.residual_scale);
 }
 
-double Simulation::previous_state_residual(double planned_depth) const {
-  const std::vector<double>& u = state_.u_previous;
-  const double alpha = state_.alpha_previous;
+double Simulation::previous_state_residual() {
+  if (!plastic_) return system_residual(state_.u_previous, state_.alpha_previous, state_.residual_scale_previous);
+  std::vector<double> u_system;
+  to_system(state_.u_previous, u_system);
   std::vector<double> f;
-  if (plastic_) {
-    for (const auto& c : contact_->candidates())
-      f.push_back(std::max(0.0, c.scale * ContactBoundary::penetration(c, u[c.equation], alpha)));
-  } else {
-    f.resize(u.size());
-    bulk_->internal_force(u.data(), f.data());
-    for (const auto& c : contact_->candidates())
-      f[c.equation] = ContactBoundary::complementarity(c, f[c.equation], u[c.equation], alpha);
-  }
-  return scaled_max(f, settings_.force_scale * planned_depth / load_case_.max_depth());
+  for (const auto& c : system_contact().candidates())
+    f.push_back(std::max(0.0, c.scale * ContactBoundary::penetration(c, u_system[c.equation], state_.alpha_previous)));
+  return scaled_max(f, state_.residual_scale_previous);
+}
+
+double Simulation::system_residual(const std::vector<double>& u, double alpha, double force_scale) {
+  std::vector<double> u_system, f;
+  to_system(u, u_system);
+  f.resize(u_system.size());
+  equations_->residual(u_system.data(), alpha, f.data());
+  return scaled_max(f, force_scale);
 }
 
 IncrementSnapshot Simulation::snapshot(const IncrementRecord& record) const {
@@ -431,6 +432,10 @@ void Simulation::restore(const SimulationState& s) {
   // The bulk model checks the history against its laws; should it refuse, nothing else changed
   // (a half-restored bulk model is not stepped: resume_from discards the simulation).
   bulk_->restore(s.history, s.u.data());
+  // The law's branch is that of the committed state, whatever flag the state was taken with (a
+  // state saved after a trial set it, as advance_to's `reported` is): Ilyushin's loading flag is
+  // set for each trial, and committed it is alpha >= deepest.
+  if (plastic_) plastic_->set_loading(s.alpha >= s.deepest);
   state_ = s;
   state_.history = {};     // the bulk model holds the live history
   state_.in_contact = {};  // implied by u
@@ -460,7 +465,7 @@ std::optional<Simulation::Sensitivities> Simulation::sensitivities(const std::ve
   to_system(state_.u, u_system);
   const std::size_t n = u_system.size();
   BulkOperator& bulk = system_bulk();
-  const ContactBoundary& contact = condensation_ ? condensation_->contact() : *contact_;
+  const ContactBoundary& contact = system_contact();
   const StiffnessPattern& pattern = equations_->pattern();
   std::vector<double> force(n);
   bulk.internal_force(u_system.data(), force.data());

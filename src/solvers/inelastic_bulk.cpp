@@ -139,16 +139,11 @@ void InelasticBulk::commit(const double* u) {
   std::copy(u, u + committed_u_.size(), committed_u_.begin());
   plastic_points_ = 0;
   max_strain_intensity_ = 0.0;
-  for (int ei = 0; ei < mesh_.elements_x(); ++ei)
-    for (int ej = 0; ej < mesh_.elements_y(); ++ej) {
-      const auto strains = elastic_.quadrature(ei, ej).strains(gather(mesh_, ei, ej, u));
-      const std::size_t first = 4 * static_cast<std::size_t>(mesh_.element(ei, ej));
-      for (std::size_t g = 0; g < 4; ++g) {
-        max_strain_intensity_ = std::max(max_strain_intensity_, strain_intensity(strains[g]));
-        law_->commit(first + g, strains[g]);
-        if (law_->has_yielded(first + g)) ++plastic_points_;
-      }
-    }
+  visit_points(u, [&](std::size_t point, const VoigtVector& strain, int, int, std::size_t) {
+    max_strain_intensity_ = std::max(max_strain_intensity_, strain_intensity(strain));
+    law_->commit(point, strain);
+    if (law_->has_yielded(point)) ++plastic_points_;
+  });
 }
 
 std::vector<double> InelasticBulk::history() const {
@@ -161,31 +156,30 @@ std::vector<double> InelasticBulk::history() const {
 void InelasticBulk::restore(const std::vector<double>& h, const double* u) {
   if (h.size() < 2) throw std::invalid_argument("inelastic history too short");
   kept_.clear();
+  plastic_points_ = static_cast<long>(h[0]);
+  max_strain_intensity_ = h[1];
   law_->restore(std::vector<double>(h.begin() + 2, h.end()));
   std::copy(u, u + committed_u_.size(), committed_u_.begin());
-  // Every point's history must be one its law can carry at the committed strain, and the two
-  // summary numbers are what commit() would count from them.
+}
+
+std::optional<std::string> InelasticBulk::history_violation() const {
   long yielded = 0;
   double largest = 0.0;
-  for (int ei = 0; ei < mesh_.elements_x(); ++ei)
-    for (int ej = 0; ej < mesh_.elements_y(); ++ej) {
-      const auto strains = elastic_.quadrature(ei, ej).strains(gather(mesh_, ei, ej, u));
-      const std::size_t first = 4 * static_cast<std::size_t>(mesh_.element(ei, ej));
-      for (std::size_t g = 0; g < 4; ++g) {
-        largest = std::max(largest, strain_intensity(strains[g]));
-        if (law_->has_yielded(first + g)) ++yielded;
-        if (const std::string wrong = law_->restored_inconsistency(first + g, strains[g]); !wrong.empty())
-          throw std::invalid_argument(fmt::format("the material history of Gauss point {} of element ({}, {}): {}",
-                                                  g, ei, ej, wrong));
-      }
-    }
-  if (h[0] != static_cast<double>(yielded) || h[1] != largest)
-    throw std::invalid_argument(fmt::format(
-        "the material history counts {:g} yielded Gauss points and a largest strain intensity {:.17g}, where its "
-        "points and the displacement give {} and {:.17g}",
-        h[0], h[1], yielded, largest));
-  plastic_points_ = yielded;
-  max_strain_intensity_ = largest;
+  std::optional<std::string> violation;
+  visit_points(committed_u_.data(), [&](std::size_t point, const VoigtVector& strain, int ei, int ej, std::size_t g) {
+    largest = std::max(largest, strain_intensity(strain));
+    if (law_->has_yielded(point)) ++yielded;
+    if (violation) return;
+    if (const auto wrong = law_->history_violation(point, strain))
+      violation = fmt::format("Gauss point {} of element ({}, {}): {}", g, ei, ej, *wrong);
+  });
+  if (violation) return violation;
+  // commit() counts both from the same points and strains: equal to the last bit.
+  if (plastic_points_ != yielded || max_strain_intensity_ != largest)
+    return fmt::format("it counts {} yielded Gauss points and a largest strain intensity {:.17g}, where its points "
+                       "and the displacement give {} and {:.17g}",
+                       plastic_points_, max_strain_intensity_, yielded, largest);
+  return std::nullopt;
 }
 
 std::array<GaussPointState, 4> InelasticBulk::gauss_point_states(int ei, int ej) const {

@@ -56,10 +56,10 @@ public:
   /// The carried state of every point, flattened, and its restoration (checkpoints).
   virtual std::vector<double> history() const = 0;
   virtual void restore(const std::vector<double>& history) = 0;
-  /// After restore: an empty string when the point's history is one the law can carry at the
-  /// committed `strain` (within the law's bounds, and what committing that strain would leave),
-  /// else what is wrong.  A checkpoint's history is checked so before a run continues from it.
-  virtual std::string restored_inconsistency(std::size_t point, const VoigtVector& strain) const = 0;
+  /// What is wrong with the point's history at the committed `strain`, or nothing: a history the
+  /// law can carry (within its bounds) and that committing that strain leaves.  A checkpoint's
+  /// history is checked so before a run continues from it.
+  virtual std::optional<std::string> history_violation(std::size_t point, const VoigtVector& strain) const = 0;
 };
 
 /// Ilyushin's deformation theory.  Without unloading rule: the secant law, path independent.
@@ -92,7 +92,7 @@ public:
   std::vector<double> history() const override;
   void restore(const std::vector<double>& history) override;
   /// The peak intensity is e_u of the peak strain; while loading, the peak is the committed strain.
-  std::string restored_inconsistency(std::size_t point, const VoigtVector& strain) const override;
+  std::optional<std::string> history_violation(std::size_t point, const VoigtVector& strain) const override;
   const IlyushinLaw& law() const { return law_; }
 
 private:
@@ -120,7 +120,7 @@ public:
   /// |eps_p| <= sqrt(3/2) eps_p_bar (every return adds sqrt(3/2) dgamma n, |n| = 1), and the
   /// committed strain's trial stress lies on or inside the yield surface of eps_p_bar (a
   /// converged state returns no further plastic strain).
-  std::string restored_inconsistency(std::size_t point, const VoigtVector& strain) const override;
+  std::optional<std::string> history_violation(std::size_t point, const VoigtVector& strain) const override;
 
 private:
   J2Law law_;

@@ -75,18 +75,16 @@ public:
   /// simulation moves on.
   IncrementSnapshot snapshot(const IncrementRecord& record) const;
 
-  /// Newton's measure of how far the current state is from equilibrium, on the whole mesh: the
-  /// largest |F_i(u)| over the force scale, F the bulk's internal force with each contact row
-  /// replaced by its complementarity function (the residual the Newton iterations drive below
-  /// solver.tolerance).  The force scale is that of a load path whose deepest depth is
-  /// `planned_depth` (a resumed branch may plan a shallower path than the run that converged the
-  /// state; the scale is proportional to the depth).
-  double equilibrium_residual(double planned_depth) const;
+  /// Newton's measure of how far the current state is from equilibrium: the largest |F_i| of the
+  /// Newton system's residual at u (the condensed near field's, or the whole mesh's) over the
+  /// force scale u converged on (SimulationState::residual_scale), the measure the iterations
+  /// drive below solver.tolerance.
+  double equilibrium_residual();
   /// The same measure for the previous converged state (u_previous at alpha_previous), as far as
   /// the current state allows: the whole residual for a model without history; for an inelastic
   /// model, whose history has moved on since, only the contact rows' kinematic part (no surface
-  /// node past the punch, scale * penetration).
-  double previous_state_residual(double planned_depth) const;
+  /// node past the punch: max(0, c_k * penetration)).
+  double previous_state_residual();
 
   double alpha() const { return state_.alpha; }
   const std::vector<double>& displacement() const { return state_.u; }
@@ -169,6 +167,10 @@ private:
   /// The bulk operators the Newton system uses (plastic, and linear elastic for the predictor).
   BulkOperator& system_bulk();
   BulkOperator& system_elastic_bulk();
+  /// The contact rows of the Newton system (the condensed near field's candidates, or all).
+  const ContactBoundary& system_contact() const { return condensation_ ? condensation_->contact() : *contact_; }
+  /// The Newton system's residual at the whole-mesh displacement u, max |F_i| / force_scale.
+  double system_residual(const std::vector<double>& u, double alpha, double force_scale);
   void to_system(const std::vector<double>& u, std::vector<double>& u_system) const;
   void from_system(const std::vector<double>& u_system, std::vector<double>& u) const;
   /// In a condensed run: grows the near field if the converged full solution `u` at depth `alpha` breaks the

@@ -18,6 +18,10 @@ struct SimulationState {
   double alpha_previous = 0.0;  ///< the one before (the predictor's)
   double deepest = 0.0;         ///< the largest converged depth so far (the load path's peak)
   bool has_previous = false;    ///< alpha_previous and u_previous hold a converged state
+  /// The force scale Newton measured the residual on when u (u_previous) converged: a resumed
+  /// run checks the state against it (a branch to a shallower path scales its own increments
+  /// smaller).
+  double residual_scale = 0.0, residual_scale_previous = 0.0;
   int rows = 0;                 ///< increments reported so far
   std::uint64_t next_target = 0;  ///< index of the next planned depth
   bool warned_fine_zone = false;
@@ -41,6 +45,8 @@ void visit_fields(State& s, Visitor&& visit) {
   visit("alpha_previous", s.alpha_previous, "the state");
   visit("deepest", s.deepest, "the state");
   visit("has_previous", s.has_previous, "the state");
+  visit("residual_scale", s.residual_scale, "the state");
+  visit("residual_scale_previous", s.residual_scale_previous, "the state");
   visit("rows", s.rows, "the state");
   visit("next_target", s.next_target, "the state");
   visit("warned_fine_zone", s.warned_fine_zone, "the state");

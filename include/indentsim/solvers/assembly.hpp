@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include "indentsim/geometry/element.hpp"
@@ -102,6 +104,10 @@ public:
   /// restoration; after restore(history, u) the model is as it was after commit(u).
   virtual std::vector<double> history() const = 0;
   virtual void restore(const std::vector<double>& history, const double* u) = 0;
+  /// What is wrong with a restored history (a checkpoint's), or nothing: every point's history
+  /// one its law can carry at the committed strain, and the statistics what the points give.
+  /// restore() itself trusts its input (a run also restores its own last reported state).
+  virtual std::optional<std::string> history_violation() const { return std::nullopt; }
 };
 
 /// Linear elasticity on the mesh: one element matrix per class of equal rectangles (the paper's

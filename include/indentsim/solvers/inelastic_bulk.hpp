@@ -29,6 +29,7 @@ public:
   ElementVector element_force(int ei, int ej) const override;
   std::vector<double> history() const override;
   void restore(const std::vector<double>& history, const double* u) override;
+  std::optional<std::string> history_violation() const override;
 
   const PointLaw& law() const { return *law_; }
   const ElasticStiffness& elastic() const { return elastic_; }
@@ -69,6 +70,16 @@ private:
   /// The element's internal force from its Gauss-point strains; the points' tangents too, if asked.
   ElementVector element_force(int ei, int ej, const std::array<VoigtVector, 4>& strains,
                               std::array<ConstitutiveMatrix, 4>* tangents = nullptr) const;
+  /// Calls visit(point, strain, ei, ej, g) for every Gauss point at u (point = 4 element + g).
+  template <class Visit>
+  void visit_points(const double* u, Visit&& visit) const {
+    for (int ei = 0; ei < mesh_.elements_x(); ++ei)
+      for (int ej = 0; ej < mesh_.elements_y(); ++ej) {
+        const auto strains = elastic_.quadrature(ei, ej).strains(gather(mesh_, ei, ej, u));
+        const std::size_t first = 4 * static_cast<std::size_t>(mesh_.element(ei, ej));
+        for (std::size_t g = 0; g < 4; ++g) visit(first + g, strains[g], ei, ej, g);
+      }
+  }
 
   const ElasticStiffness& elastic_;
   const Mesh& mesh_;
