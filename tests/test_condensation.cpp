@@ -72,7 +72,7 @@ TEST(FarFieldCondensation, SchurComplementIsExact) {
     Mesh mesh = Mesh::from_plan(lc, plan);
     const StiffnessPattern pattern(mesh);
     const ElasticStiffness k(mesh, ElasticMaterial{lc.material.E, lc.material.nu}, pattern);
-    const ContactBoundary contact(mesh, make_punch(lc.punch), pattern, k.values());
+    const NodeToRigidContact contact(mesh, make_punch(lc.punch), pattern, k.values());
     const NearField near{true, 8, name == std::string("paper.toml") ? 6 : 0, name == std::string("paper.toml") ? 5 : 0};
     const FarFieldCondensation condensation(k, contact, near);
     ASSERT_LT(condensation.size(), mesh.equations() / 4);
@@ -149,7 +149,7 @@ TEST(FarFieldCondensation, TheDenseInterfaceBlockIsFactoredLastWhereThatLeavesLe
     Mesh mesh = Mesh::from_plan(lc, plan);
     const StiffnessPattern pattern(mesh);
     const ElasticStiffness k(mesh, ElasticMaterial{lc.material.E, lc.material.nu}, pattern);
-    const ContactBoundary contact(mesh, make_punch(lc.punch), pattern, k.values());
+    const NodeToRigidContact contact(mesh, make_punch(lc.punch), pattern, k.values());
     const FarFieldCondensation condensation(k, contact, scene.near);
     const StiffnessPattern& with_block = condensation.pattern();
     ASSERT_EQ(static_cast<std::int64_t>(with_block.dense_block().size()), condensation.interface_size());

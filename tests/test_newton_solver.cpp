@@ -5,6 +5,7 @@
 // that each full step multiplies the error by exactly 1 - 1/c: c = 2 converges linearly (the
 // residual halves), c = 0.4 diverges (it grows by 1.5).
 #include <cmath>
+#include <stdexcept>
 
 #include <gtest/gtest.h>
 
@@ -30,12 +31,16 @@ public:
     for (std::size_t i = 0; i < stiffness_.values().size(); ++i) values[i] = c_ * stiffness_.values()[i];
   }
   void set_jacobian_factor(double c) { c_ = c; }
+  /// Pretend rows that couple unknowns (a mortar or frictional contact discretization would).
+  void declare_coupling_rows() { pinned_rows_only_ = false; }
+  bool symmetric_but_pinned_rows() const override { return pinned_rows_only_; }
 
 private:
   const StiffnessPattern& pattern_;
   ElasticStiffness& stiffness_;
   std::vector<double> load_;
   double c_;
+  bool pinned_rows_only_ = true;
 };
 
 class NewtonAttempts : public ::testing::Test {
@@ -112,4 +117,17 @@ TEST_F(NewtonAttempts, ADivergingAttemptHandsBackItsBestIterateAndSaysItWasNotCo
   // The best iterate is the predictor itself.
   EXPECT_EQ(u, predictor);
   EXPECT_DOUBLE_EQ(report.residual, report.residual_history.front());
+}
+
+// CHOLMOD's solve eliminates pinned unknowns and factors a symmetric rest: equations whose rows
+// are not of that shape are refused before any solve, and KLU takes them.
+TEST_F(NewtonAttempts, CholmodRefusesRowsThatAreNotSymmetricButForPinnedUnknownsAndKluTakesThem) {
+  settings_.linear = LinearSolverKind::cholmod;
+  EXPECT_NO_THROW((NewtonSolver{*equations_, settings_}));
+  equations_->declare_coupling_rows();
+  EXPECT_THROW((NewtonSolver{*equations_, settings_}), std::logic_error);
+  settings_.linear = LinearSolverKind::klu;
+  NewtonSolver solver(*equations_, settings_);
+  std::vector<double> u = zero();
+  EXPECT_TRUE(solver.solve(0.0, u).converged);
 }

@@ -82,7 +82,7 @@ void Simulation::build(const RunConfiguration& configuration, const std::optiona
     plastic_ = std::make_unique<InelasticBulk>(*stiffness_, std::move(point_law));
     bulk_ = plastic_.get();
   }
-  contact_ = std::make_unique<ContactBoundary>(*mesh_, make_punch(load_case_.punch), *pattern_, stiffness_->values());
+  contact_ = std::make_unique<NodeToRigidContact>(*mesh_, make_punch(load_case_.punch), *pattern_, stiffness_->values());
   settings_.displacement_scale = load_case_.max_depth();
   // Newton's residual is measured against the nodal forces of the scene: E* alpha_max per unit
   // thickness in plane strain, times the ring 2 pi a* in axisymmetry (docs/DESIGN.md §3).
@@ -250,7 +250,7 @@ void Simulation::predict(double trial, long& iterations, long& factorizations) {
 
 bool Simulation::clear_of_punch() const {
   for (const ContactCandidate& c : contact_->candidates())
-    if (ContactBoundary::penetration(c, state_.u[static_cast<std::size_t>(c.equation)], state_.alpha) >= 0.0) return false;
+    if (NodeToRigidContact::penetration(c, state_.u[static_cast<std::size_t>(c.equation)], state_.alpha) >= 0.0) return false;
   return true;
 }
 
@@ -379,7 +379,7 @@ double Simulation::previous_state_residual() {
   to_system(state_.u_previous, u_system);
   std::vector<double> f;
   for (const auto& c : system_contact().candidates())
-    f.push_back(std::max(0.0, c.scale * ContactBoundary::penetration(c, u_system[c.equation], state_.alpha_previous)));
+    f.push_back(std::max(0.0, c.scale * NodeToRigidContact::penetration(c, u_system[c.equation], state_.alpha_previous)));
   return scaled_max(f, state_.residual_scale_previous);
 }
 
@@ -465,7 +465,7 @@ std::optional<Simulation::Sensitivities> Simulation::sensitivities(const std::ve
   to_system(state_.u, u_system);
   const std::size_t n = u_system.size();
   BulkOperator& bulk = system_bulk();
-  const ContactBoundary& contact = system_contact();
+  const NodeToRigidContact& contact = system_contact();
   const StiffnessPattern& pattern = equations_->pattern();
   std::vector<double> force(n);
   bulk.internal_force(u_system.data(), force.data());
@@ -489,7 +489,7 @@ std::optional<Simulation::Sensitivities> Simulation::sensitivities(const std::ve
   const auto& candidates = contact.candidates();
   std::vector<char> active(candidates.size());
   for (std::size_t k = 0; k < candidates.size(); ++k)
-    active[k] = ContactBoundary::active(candidates[k], force[candidates[k].equation], u_system[candidates[k].equation], state_.alpha);
+    active[k] = NodeToRigidContact::active(candidates[k], force[candidates[k].equation], u_system[candidates[k].equation], state_.alpha);
   std::vector<std::vector<double>> du = d_force;
   for (auto& rhs : du) {
     for (double& v : rhs) v = -v;

@@ -14,8 +14,8 @@ int contact_candidate_count(const Mesh& mesh, const PunchShape& punch) {
   return count;  // beyond the punch's rim: never touched
 }
 
-ContactBoundary::ContactBoundary(const Mesh& mesh, std::shared_ptr<const PunchShape> punch,
-                                 const StiffnessPattern& pattern, const std::vector<double>& stiffness_values)
+NodeToRigidContact::NodeToRigidContact(const Mesh& mesh, std::shared_ptr<const PunchShape> punch,
+                                       const StiffnessPattern& pattern, const std::vector<double>& stiffness_values)
     : punch_(std::move(punch)), symmetry_factor_(mesh.kinematics().symmetry_factor()) {
   const int j = mesh.top_row();
   const int count = contact_candidate_count(mesh, *punch_);
@@ -30,10 +30,42 @@ ContactBoundary::ContactBoundary(const Mesh& mesh, std::shared_ptr<const PunchSh
     c.scale = stiffness_values[pattern.diagonal_position(c.equation)];
     c.tributary_measure = tributary_measure(mesh, i);
     candidates_.push_back(c);
+    row_equations_.push_back(c.equation);
   }
 }
 
-ContactResult evaluate_contact(const ContactBoundary& boundary, const double* u, const double* internal_force,
+NodeToRigidContact::NodeToRigidContact(std::shared_ptr<const PunchShape> punch, double symmetry_factor,
+                                       std::vector<ContactCandidate> candidates)
+    : punch_(std::move(punch)), symmetry_factor_(symmetry_factor), candidates_(std::move(candidates)) {
+  for (const auto& c : candidates_) row_equations_.push_back(c.equation);
+}
+
+void NodeToRigidContact::write_residual_rows(const double* u, double alpha, const double* row_force,
+                                             double* f) const {
+  for (std::size_t i = 0; i < candidates_.size(); ++i) {
+    const auto& c = candidates_[i];
+    f[c.equation] = complementarity(c, row_force[i], u[c.equation], alpha);
+  }
+}
+
+std::uint64_t NodeToRigidContact::write_jacobian_rows(const double* u, double alpha, const double* row_force,
+                                                      const StiffnessPattern& pattern,
+                                                      const std::vector<std::vector<std::int64_t>>& row_positions,
+                                                      double* values) const {
+  std::uint64_t signature = 0xcbf29ce484222325ull;  // FNV-1a over the active flags
+  for (std::size_t i = 0; i < candidates_.size(); ++i) {
+    const auto& c = candidates_[i];
+    const bool on = active(c, row_force[i], u[c.equation], alpha);
+    signature = (signature ^ (on ? 1u : 2u)) * 0x100000001b3ull;
+    if (!on) continue;
+    // Active node: the row of c (v + alpha - g) is c e_k.
+    for (std::int64_t p : row_positions[i]) values[p] = 0.0;
+    values[pattern.diagonal_position(c.equation)] = c.scale;
+  }
+  return signature;
+}
+
+ContactResult evaluate_contact(const NodeToRigidContact& boundary, const double* u, const double* internal_force,
                                double alpha) {
   const auto& cs = boundary.candidates();
   ContactResult r;
@@ -43,9 +75,9 @@ ContactResult evaluate_contact(const ContactBoundary& boundary, const double* u,
   double half_model_force = 0.0;
   for (std::size_t k = 0; k < cs.size(); ++k) {
     const double fk = internal_force[cs[k].equation];
-    const bool on = ContactBoundary::active(cs[k], fk, u[cs[k].equation], alpha);
+    const bool on = NodeToRigidContact::active(cs[k], fk, u[cs[k].equation], alpha);
     r.in_contact[k] = on;
-    r.gap[k] = on ? 0.0 : -ContactBoundary::penetration(cs[k], u[cs[k].equation], alpha);
+    r.gap[k] = on ? 0.0 : -NodeToRigidContact::penetration(cs[k], u[cs[k].equation], alpha);
     // docs/MODEL.md §3: P is the sum of the vertical reactions of all contact nodes, the axis node
     // included, times the symmetry factor (twice, for the half model of plane strain).  Open nodes carry no force (their residual is the
     // equilibrium residual itself), so summing -r_k over contact nodes is the reaction.
@@ -60,7 +92,7 @@ ContactResult evaluate_contact(const ContactBoundary& boundary, const double* u,
   return r;
 }
 
-double contact_half_width(const ContactBoundary& boundary, const ContactResult& contact) {
+double contact_half_width(const NodeToRigidContact& boundary, const ContactResult& contact) {
   const auto& cs = boundary.candidates();
   const int n = contact.outermost;
   const int candidates = static_cast<int>(cs.size());

@@ -21,25 +21,22 @@ static_assert(std::is_same_v<sunindextype, std::int64_t>,
               "SUNDIALS on Debian uses 64-bit indices; the stiffness pattern stores int64_t");
 
 // ---------------------------------------------------------------------------------------------
-// The residual and Jacobian of elastic contact.
+// The residual and Jacobian of the bulk with contact.
 
 ContactEquations::ContactEquations(const StiffnessPattern& pattern, BulkOperator& bulk, BulkOperator& elastic,
-                                   const ContactBoundary& contact)
+                                   const ContactDiscretization& contact)
     : pattern_(pattern), bulk_(&bulk), elastic_(elastic), contact_(contact), internal_force_(pattern.size()) {
-  for (const auto& c : contact.candidates()) contact_rows_.push_back(pattern.row_positions(c.equation));
+  for (int equation : contact.row_equations()) contact_rows_.push_back(pattern.row_positions(equation));
 }
 
 void ContactEquations::residual(const double* u, double alpha, double* f) {
   bulk_->internal_force(u, f);
-  const auto& cs = contact_.candidates();
+  const auto& rows = contact_.row_equations();
   residual_u_.assign(u, u + pattern_.size());
-  residual_contact_force_.resize(cs.size());
+  residual_contact_force_.resize(rows.size());
   residual_bulk_ = bulk_;
-  for (std::size_t i = 0; i < cs.size(); ++i) {
-    const auto& c = cs[i];
-    residual_contact_force_[i] = f[c.equation];
-    f[c.equation] = ContactBoundary::complementarity(c, f[c.equation], u[c.equation], alpha);
-  }
+  for (std::size_t i = 0; i < rows.size(); ++i) residual_contact_force_[i] = f[rows[i]];
+  contact_.write_residual_rows(u, alpha, residual_contact_force_.data(), f);
 }
 
 // Coming back to an earlier contact set counts as a cycle unless the residual has at least halved
@@ -59,25 +56,15 @@ bool ActiveSetHistory::record(std::uint64_t signature, double residual) {
 
 void ContactEquations::jacobian(const double* u, double alpha, double* values) {
   bulk_->tangent(u, values);
-  const auto& cs = contact_.candidates();
+  const auto& rows = contact_.row_equations();
   const bool cached = residual_bulk_ == bulk_ && residual_u_.size() == static_cast<std::size_t>(pattern_.size()) &&
                       std::equal(residual_u_.begin(), residual_u_.end(), u);
   if (!cached) {
     bulk_->internal_force(u, internal_force_.data());
-    residual_contact_force_.resize(cs.size());
-    for (std::size_t i = 0; i < cs.size(); ++i) residual_contact_force_[i] = internal_force_[cs[i].equation];
+    residual_contact_force_.resize(rows.size());
+    for (std::size_t i = 0; i < rows.size(); ++i) residual_contact_force_[i] = internal_force_[rows[i]];
   }
-  std::uint64_t signature = 0xcbf29ce484222325ull;  // FNV-1a over the active flags
-  for (std::size_t i = 0; i < cs.size(); ++i) {
-    const auto& c = cs[i];
-    const bool active = ContactBoundary::active(c, residual_contact_force_[i], u[c.equation], alpha);
-    signature = (signature ^ (active ? 1u : 2u)) * 0x100000001b3ull;
-    if (!active) continue;
-    // Active node: the row of c (v + alpha - g) is c e_k.
-    for (std::int64_t p : contact_rows_[i]) values[p] = 0.0;
-    values[pattern_.diagonal_position(c.equation)] = c.scale;
-  }
-  signature_ = signature;
+  signature_ = contact_.write_jacobian_rows(u, alpha, residual_contact_force_.data(), pattern_, contact_rows_, values);
 }
 
 bool ContactEquations::pivot_reference(double* values) {
@@ -136,6 +123,10 @@ struct NewtonSolver::Impl {
         kinsol(context) {
     if (!jacobian) throw std::runtime_error("SUNSparseMatrix failed");
     if (settings.linear == LinearSolverKind::cholmod) {
+      // CHOLMOD eliminates pinned unknowns and factors the symmetric rest: exact only for such rows.
+      if (!eq.symmetric_but_pinned_rows())
+        throw std::logic_error("CHOLMOD cannot solve these Newton systems: their rows are not symmetric but for "
+                               "pinned unknowns (choose KLU for this contact discretization)");
       direct = std::make_unique<CholmodSolver>(context, eq.pattern().dense_block());
     } else {
       auto klu = std::make_unique<KluSolver>(context);

@@ -8,7 +8,7 @@
 
 namespace indentsim {
 
-double elastic_unloading_stiffness(const ElasticStiffness& stiffness, const ContactBoundary& contact,
+double elastic_unloading_stiffness(const ElasticStiffness& stiffness, const NodeToRigidContact& contact,
                                    const ContactResult& state) {
   const StiffnessPattern& pattern = stiffness.pattern();
   const std::vector<double>& values = stiffness.values();

@@ -20,7 +20,7 @@ class IncrementSnapshot {
 public:
   IncrementSnapshot(const IncrementRecord& record, double alpha, double free_surface_depth, const Mesh& mesh,
                     const std::vector<double>& displacement, const BulkModel& bulk,
-                    const ContactBoundary& contact_boundary, std::function<ContactResult()> evaluate_contact,
+                    const NodeToRigidContact& contact_boundary, std::function<ContactResult()> evaluate_contact,
                     std::function<double(const ContactResult&)> evaluate_unloading_stiffness)
       : record(record),
         alpha(alpha),
@@ -38,7 +38,7 @@ public:
   const Mesh& mesh;
   const std::vector<double>& displacement;
   const BulkModel& bulk;
-  const ContactBoundary& contact_boundary;
+  const NodeToRigidContact& contact_boundary;
 
   const ContactResult& contact() const {
     if (!contact_) contact_ = evaluate_contact_();

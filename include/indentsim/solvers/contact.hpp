@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "indentsim/solvers/assembly.hpp"
+#include "indentsim/solvers/contact_discretization.hpp"
 #include "indentsim/geometry/mesh.hpp"
 #include "indentsim/geometry/punch.hpp"
 
@@ -33,14 +34,15 @@ struct ContactCandidate {
 /// candidate i).
 int contact_candidate_count(const Mesh& mesh, const PunchShape& punch);
 
-class ContactBoundary {
+/// The seed paper's discretization (docs/MODEL.md §3): one complementarity row per candidate
+/// node, on its vertical unknown, against the rigid punch's profile at the node's abscissa.
+class NodeToRigidContact final : public ContactDiscretization {
 public:
-  ContactBoundary(const Mesh& mesh, std::shared_ptr<const PunchShape> punch, const StiffnessPattern& pattern,
-                  const std::vector<double>& stiffness_values);
+  NodeToRigidContact(const Mesh& mesh, std::shared_ptr<const PunchShape> punch, const StiffnessPattern& pattern,
+                     const std::vector<double>& stiffness_values);
   /// Given candidates (a subset renumbered onto a condensed system, say).
-  ContactBoundary(std::shared_ptr<const PunchShape> punch, double symmetry_factor,
-                  std::vector<ContactCandidate> candidates)
-      : punch_(std::move(punch)), symmetry_factor_(symmetry_factor), candidates_(std::move(candidates)) {}
+  NodeToRigidContact(std::shared_ptr<const PunchShape> punch, double symmetry_factor,
+                     std::vector<ContactCandidate> candidates);
 
   const std::vector<ContactCandidate>& candidates() const { return candidates_; }
   const PunchShape& punch() const { return *punch_; }
@@ -59,10 +61,23 @@ public:
     return scaled >= internal_force ? scaled : internal_force;
   }
 
+  // The Newton rows (contact_discretization.hpp): row i is candidate i's vertical unknown.
+  const std::vector<int>& row_equations() const override { return row_equations_; }
+  /// F_k = max(r_k, c_k (v_k + alpha - g_k)).
+  void write_residual_rows(const double* u, double alpha, const double* row_force, double* f) const override;
+  /// An active node's row is c_k e_k, an inactive one keeps its stiffness row (the primal-dual
+  /// active set method); the signature is FNV-1a over the candidates' flags.
+  std::uint64_t write_jacobian_rows(const double* u, double alpha, const double* row_force,
+                                    const StiffnessPattern& pattern,
+                                    const std::vector<std::vector<std::int64_t>>& row_positions,
+                                    double* values) const override;
+  bool rows_pin_unknowns() const override { return true; }
+
 private:
   std::shared_ptr<const PunchShape> punch_;
   double symmetry_factor_ = 2.0;
   std::vector<ContactCandidate> candidates_;
+  std::vector<int> row_equations_;  ///< candidates_[i].equation
 };
 
 /// The contact state of a converged solution.
@@ -77,7 +92,7 @@ struct ContactResult {
 };
 
 /// Evaluates the contact state from the free-equation displacement u and internal force K u.
-ContactResult evaluate_contact(const ContactBoundary& boundary, const double* u, const double* internal_force,
+ContactResult evaluate_contact(const NodeToRigidContact& boundary, const double* u, const double* internal_force,
                                double alpha);
 
 /// Contact half-width (radius) a from the discrete solution, resolved inside the element where the
@@ -99,6 +114,6 @@ ContactResult evaluate_contact(const ContactBoundary& boundary, const double* u,
 /// (x_{n-1}, x_{n+1})) or a fit without an opening gap falls back to the middle of [x_n, x_{n+1}].
 /// Consistent: the fitted nodes are within 3 elements of the edge; measured convergence in
 /// tests/test_contact_edge.cpp and docs/DESIGN.md §4.
-double contact_half_width(const ContactBoundary& boundary, const ContactResult& contact);
+double contact_half_width(const NodeToRigidContact& boundary, const ContactResult& contact);
 
 }  // namespace indentsim

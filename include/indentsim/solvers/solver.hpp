@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "indentsim/solvers/assembly.hpp"
-#include "indentsim/solvers/contact.hpp"
+#include "indentsim/solvers/contact_discretization.hpp"
 
 namespace indentsim {
 
@@ -48,17 +48,20 @@ public:
   /// chooses its pivots once for all the Jacobians to come (src/solvers/klu_solver.hpp); false
   /// when there is none (the first Jacobian factored is the reference then).
   virtual bool pivot_reference(double* /*values*/) { return false; }
+  /// True when every Jacobian is symmetric but for rows c_k e_k (pinned unknowns): what CHOLMOD's
+  /// solve assumes (cholmod_solver.hpp).  NewtonSolver refuses CHOLMOD otherwise.
+  virtual bool symmetric_but_pinned_rows() const { return true; }
 };
 
-/// The bulk model (elastic or plastic) with Signorini contact: F = f_int(u), with the contact
-/// rows replaced by the complementarity function of ContactBoundary.  One Newton iteration
-/// handles the material nonlinearity and the contact together.
+/// The bulk model (elastic or plastic) with contact: F = f_int(u), with the contact rows written
+/// by the contact discretization (contact_discretization.hpp).  One Newton iteration handles the
+/// material nonlinearity and the contact together.
 class ContactEquations : public IncrementEquations {
 public:
   /// `elastic` is the linear elastic bulk of the same system (the same object for an elastic
   /// scene): its stiffness is the pivot reference.
   ContactEquations(const StiffnessPattern& pattern, BulkOperator& bulk, BulkOperator& elastic,
-                   const ContactBoundary& contact);
+                   const ContactDiscretization& contact);
   const StiffnessPattern& pattern() const override { return pattern_; }
   /// Solve with another bulk model on the same pattern (the elastic predictor of a plastic run).
   void use_bulk(BulkOperator& bulk) { bulk_ = &bulk; }
@@ -66,13 +69,14 @@ public:
   void residual(const double* u, double alpha, double* f) override;
   void jacobian(const double* u, double alpha, double* values) override;
   bool pivot_reference(double* values) override;
+  bool symmetric_but_pinned_rows() const override { return contact_.rows_pin_unknowns(); }
 
 private:
   const StiffnessPattern& pattern_;
   BulkOperator* bulk_;
   BulkOperator& elastic_;
-  const ContactBoundary& contact_;
-  std::vector<std::vector<std::int64_t>> contact_rows_;  // value positions of each candidate's row
+  const ContactDiscretization& contact_;
+  std::vector<std::vector<std::int64_t>> contact_rows_;  // value positions of each contact row
   std::vector<double> internal_force_;                    // scratch, sized once
   // The contact rows' internal forces of the last residual evaluation, and where it was taken:
   // KINSOL evaluates F(u) before J(u) at the same u, so the Jacobian reuses them instead of a

@@ -14,7 +14,7 @@
 namespace indentsim {
 
 /// S [N/m in axisymmetry, N/m per m in plane strain] for the contact set of `state`.
-double elastic_unloading_stiffness(const ElasticStiffness& stiffness, const ContactBoundary& contact,
+double elastic_unloading_stiffness(const ElasticStiffness& stiffness, const NodeToRigidContact& contact,
                                    const ContactResult& state);
 
 }  // namespace indentsim
