@@ -177,6 +177,14 @@ TEST_F(Hostile, ForgedStatesWithAValidChecksumAreRefusedByWhatTheStateProves) {
   };
   const auto ilyushin_point = [&](const Checkpoint& c) { return yielded_point(c, 3, 4); };
   const auto j2_point = [&](const Checkpoint& c) { return yielded_point(c, 2, 4); };
+  // The embedded case's kappa set to `value` (its hash recomputed with the checksum).
+  const auto embedded_kappa = [](std::string value) {
+    return [value](Checkpoint& c) {
+      const std::size_t at = c.load_case_toml.find("kappa = ");
+      ASSERT_NE(at, std::string::npos);
+      c.load_case_toml.replace(at, c.load_case_toml.find('\n', at) - at, "kappa = " + value);
+    };
+  };
   struct Forgery {
     const char* name;
     const fs::path* good;
@@ -184,13 +192,7 @@ TEST_F(Hostile, ForgedStatesWithAValidChecksumAreRefusedByWhatTheStateProves) {
     std::vector<const char*> says;  ///< the reason given (one of these: the first check that fails)
   };
   const Forgery forgeries[] = {
-      {"kappa.ck", &ilyushin,
-       [](Checkpoint& c) {
-         const std::size_t at = c.load_case_toml.find("kappa = ");
-         ASSERT_NE(at, std::string::npos);
-         c.load_case_toml.replace(at, c.load_case_toml.find('\n', at) - at, "kappa = 0.9");
-       },
-       {"not a converged one", "contact set does not follow"}},
+      {"kappa.ck", &ilyushin, embedded_kappa("0.9"), {"not a converged one", "contact set does not follow"}},
       {"u_node.ck", &ilyushin, [](Checkpoint& c) { c.state.u[c.state.u.size() / 2] *= 1.001; },
        {"not a converged one", "committed strain"}},
       {"u_previous_zeroed.ck", &ilyushin,
@@ -214,13 +216,7 @@ TEST_F(Hostile, ForgedStatesWithAValidChecksumAreRefusedByWhatTheStateProves) {
        {"not a converged one", "plastic strain"}},
       {"plastic_path_shortened.ck", &j2, [&](Checkpoint& c) { c.state.history[j2_point(c) + 4] *= 0.5; },
        {"material history"}},
-      {"j2_kappa.ck", &j2,
-       [](Checkpoint& c) {
-         const std::size_t at = c.load_case_toml.find("kappa = ");
-         ASSERT_NE(at, std::string::npos);
-         c.load_case_toml.replace(at, c.load_case_toml.find('\n', at) - at, "kappa = 0.98");
-       },
-       {"not a converged one", "yield surface"}},
+      {"j2_kappa.ck", &j2, embedded_kappa("0.98"), {"not a converged one", "yield surface"}},
   };
   for (const Forgery& f : forgeries) {
     SCOPED_TRACE(f.name);

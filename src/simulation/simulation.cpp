@@ -134,7 +134,7 @@ IncrementRecord Simulation::advance_to(double target) {
   // each trial: committed, it is alpha >= deepest).
   const auto return_to_reported = [&] {
     if (reported) restore(*reported);
-    else if (plastic_) plastic_->set_loading(state_.alpha >= state_.deepest);  // as restore() sets it
+    else take_committed_branch();
   };
   const auto stop_if_requested = [&] {
     if (const int signal = interruption_requested()) {
@@ -210,6 +210,10 @@ bool Simulation::solve_at(double trial, SolveCounters& counters, const std::func
 
 // A converged trial becomes the state: the displacement (guess_, already mapped from the Newton
 // system), the depth, and the material history, which moves with every converged (sub-)step.
+void Simulation::take_committed_branch() {
+  if (plastic_) plastic_->set_loading(state_.alpha >= state_.deepest);
+}
+
 void Simulation::commit(double trial) {
   state_.u_previous.swap(state_.u);
   state_.u.swap(guess_);
@@ -429,16 +433,15 @@ void Simulation::restore(const SimulationState& s) {
       }))
     throw std::invalid_argument("the saved plastic zone growth is not a list of depths and extents");
   const bool rebuild = !(near == state_.near_field);
-  // The bulk model checks the history against its laws; should it refuse, nothing else changed
-  // (a half-restored bulk model is not stepped: resume_from discards the simulation).
+  // The bulk model checks the history fits its points (its content is checked on resume, by
+  // history_violation); should it refuse, nothing else changed (resume_from discards the simulation).
   bulk_->restore(s.history, s.u.data());
-  // The law's branch is that of the committed state, whatever flag the state was taken with (a
-  // state saved after a trial set it, as advance_to's `reported` is): Ilyushin's loading flag is
-  // set for each trial, and committed it is alpha >= deepest.
-  if (plastic_) plastic_->set_loading(s.alpha >= s.deepest);
   state_ = s;
   state_.history = {};     // the bulk model holds the live history
   state_.in_contact = {};  // implied by u
+  // Whatever flag the state was taken with (a state saved after a trial set it, as advance_to's
+  // `reported` is).
+  take_committed_branch();
   if (rebuild) build_system();
   if (contact().in_contact != s.in_contact)
     throw std::invalid_argument("the saved contact set does not follow from the saved displacement");

@@ -156,6 +156,9 @@ private:
   bool solve_at(double trial, SolveCounters& counters, const std::function<void()>& stop_if_requested);
   /// Makes the converged trial (in guess_) the current state.
   void commit(double trial);
+  /// Sets the law's branch to the committed state's: Ilyushin's loading flag is set for each trial
+  /// (solve_at), and at a committed state it is alpha >= deepest.
+  void take_committed_branch();
   IncrementRecord record(double wall_seconds, long iterations, long factorizations, int cutbacks);
   /// Initial guess for depth `trial` into guess_ (counts any solve it needs).
   void predict(double trial, long& iterations, long& factorizations);
