@@ -413,15 +413,20 @@ class WriteIntoAFolder(Temporary):
                                 "--out", busy, "--set", "load.increments=2000", "--set", "mesh.error_estimate=\"off\""],
                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         try:
+            # The folder's listing is settled once the run has written its first summary (curve.csv
+            # comes first): from then on only write() could change it, but for the run's own
+            # atomic writes' passing *.tmp files.
+            def listing():
+                return sorted(name for name in os.listdir(busy) if not name.endswith(".tmp"))
             deadline = time.monotonic() + 60
-            while not os.path.isfile(os.path.join(busy, "curve.csv")) and time.monotonic() < deadline:
+            while not os.path.isfile(os.path.join(busy, "summary.json")) and time.monotonic() < deadline:
                 time.sleep(0.02)
-            before = sorted(os.listdir(busy))
+            before = listing()
             with self.assertRaises(indentsim.InputError) as caught:
                 r.write(busy)
             self.assertEqual(run.poll(), None, "the CLI run ended before write() was tried")
             self.assertIn(f'"{busy}" is in use by another indentsim run (pid {run.pid})', str(caught.exception))
-            self.assertEqual(sorted(os.listdir(busy)), before)
+            self.assertEqual(listing(), before)
         finally:
             run.terminate()
             run.wait()
