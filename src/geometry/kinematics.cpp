@@ -170,6 +170,8 @@ double Axisymmetric::tributary_measure(double left, double x, double right) cons
   return std::numbers::pi / 3.0 * ((x - left) * (left + 2.0 * x) + (right - x) * (2.0 * x + right));
 }
 
+double Axisymmetric::surface_density(double x) const { return 2.0 * std::numbers::pi * x; }
+
 double Axisymmetric::nodal_force_scale(double stress_times_length, double contact) const {
   return stress_times_length * 2.0 * std::numbers::pi * contact;
 }

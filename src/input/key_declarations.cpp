@@ -456,6 +456,16 @@ const std::vector<KeyDeclaration>& key_declarations() {
                             "converging one may keep the last), fresh (factor every iteration), auto (krylov for a "
                             "plastic specimen, reuse for an elastic one)"},
                            jacobian_names, [](auto& c) -> auto& { return c.solver.jacobian; }));
+    k.push_back(choice_key({"contact", "discretization", "choice", "", "",
+                            "node_to_rigid (a complementarity row per surface node, the seed paper's), "
+                            "integrated_gap (the penetration integrated over the surface against the exact punch "
+                            "profile, a penalty pressure: the contact edge moves inside the elements)"},
+                           contact_discretization_names,
+                           [](auto& c) -> auto& { return c.contact.discretization; }));
+    k.push_back(number_key({"contact", "penalty", "number", "[1, 1e6]", "",
+                            "integrated_gap's penalty over a surface node's own stiffness: the penetration under a "
+                            "pressure p is about p h / (penalty E*)"},
+                           [](auto& c) -> auto& { return c.contact.penalty; }));
     return k;
   }();
   return keys;

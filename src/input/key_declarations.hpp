@@ -52,6 +52,10 @@ inline constexpr Choice<ErrorEstimateChoice> error_estimate_names[] = {{"richard
 inline constexpr Choice<FarFieldChoice> far_field_names[] = {
     {"auto", FarFieldChoice::automatic}, {"condense", FarFieldChoice::condense}, {"full", FarFieldChoice::full}};
 
+inline constexpr Choice<ContactDiscretizationChoice> contact_discretization_names[] = {
+    {"node_to_rigid", ContactDiscretizationChoice::node_to_rigid},
+    {"integrated_gap", ContactDiscretizationChoice::integrated_gap}};
+
 template <class E, std::size_t N>
 const char* name_of(const Choice<E> (&names)[N], E value) {
   for (const auto& c : names)

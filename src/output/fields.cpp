@@ -159,7 +159,7 @@ std::array<double, 2> nodal_displacement(const Mesh& mesh, const double* u, int 
 }
 
 std::string vtu_document(const FieldFrame& frame, const Mesh& mesh, const double* u, const BulkModel& bulk,
-                         const NodalStresses& nodal, const NodeToRigidContact& contact, const ContactResult& contact_state) {
+                         const NodalStresses& nodal, const ContactDiscretization& contact, const ContactResult& contact_state) {
   const auto nodes = static_cast<std::size_t>(mesh.nodes());
   const auto cells = static_cast<std::size_t>(mesh.elements());
   const auto displacement = [&](std::size_t n, int c) {

@@ -1,5 +1,6 @@
 #include "indentsim/simulation/simulation.hpp"
 #include "indentsim/solvers/unloading_stiffness.hpp"
+#include "indentsim/solvers/integrated_gap_contact.hpp"
 #include "indentsim/base/worker_threads.hpp"
 
 #include "indentsim/base/interruption.hpp"
@@ -82,7 +83,11 @@ void Simulation::build(const RunConfiguration& configuration, const std::optiona
     plastic_ = std::make_unique<InelasticBulk>(*stiffness_, std::move(point_law));
     bulk_ = plastic_.get();
   }
-  contact_ = std::make_unique<NodeToRigidContact>(*mesh_, make_punch(load_case_.punch), *pattern_, stiffness_->values());
+  if (load_case_.contact.discretization == ContactDiscretizationChoice::integrated_gap)
+    contact_ = std::make_unique<IntegratedGapContact>(*mesh_, make_punch(load_case_.punch), *pattern_,
+                                                      stiffness_->values(), load_case_.contact.penalty);
+  else
+    contact_ = std::make_unique<NodeToRigidContact>(*mesh_, make_punch(load_case_.punch), *pattern_, stiffness_->values());
   settings_.displacement_scale = load_case_.max_depth();
   // Newton's residual is measured against the nodal forces of the scene: E* alpha_max per unit
   // thickness in plane strain, times the ring 2 pi a* in axisymmetry (docs/DESIGN.md §3).
@@ -252,11 +257,7 @@ void Simulation::predict(double trial, long& iterations, long& factorizations) {
   if (!elastic.converged) to_system(state_.u, system_guess_);
 }
 
-bool Simulation::clear_of_punch() const {
-  for (const ContactCandidate& c : contact_->candidates())
-    if (NodeToRigidContact::penetration(c, state_.u[static_cast<std::size_t>(c.equation)], state_.alpha) >= 0.0) return false;
-  return true;
-}
+bool Simulation::clear_of_punch() const { return !contact_->touches(state_.u.data(), state_.alpha); }
 
 void Simulation::build_system() {
   if (newton_) retired_symbolic_analyses_ += newton_->total_symbolic_analyses();
@@ -359,7 +360,7 @@ bool Simulation::grow_near_field(const std::vector<double>& u, double alpha) {
 ContactResult Simulation::contact() const {
   std::vector<double> internal_force(state_.u.size());
   bulk_->internal_force(state_.u.data(), internal_force.data());
-  return evaluate_contact(*contact_, state_.u.data(), internal_force.data(), state_.alpha);
+  return contact_->evaluate(state_.u.data(), internal_force.data(), state_.alpha);
 }
 
 namespace {
@@ -381,10 +382,8 @@ double Simulation::previous_state_residual() {
   if (!plastic_) return system_residual(state_.u_previous, state_.alpha_previous, state_.residual_scale_previous);
   std::vector<double> u_system;
   to_system(state_.u_previous, u_system);
-  std::vector<double> f;
-  for (const auto& c : system_contact().candidates())
-    f.push_back(std::max(0.0, c.scale * NodeToRigidContact::penetration(c, u_system[c.equation], state_.alpha_previous)));
-  return scaled_max(f, state_.residual_scale_previous);
+  return scaled_max(system_contact().admissibility_violation(u_system.data(), state_.alpha_previous),
+                    state_.residual_scale_previous);
 }
 
 double Simulation::system_residual(const std::vector<double>& u, double alpha, double force_scale) {
@@ -398,16 +397,18 @@ double Simulation::system_residual(const std::vector<double>& u, double alpha, d
 IncrementSnapshot Simulation::snapshot(const IncrementRecord& record) const {
   return IncrementSnapshot(
       record, state_.alpha, free_surface_depth(), *mesh_, state_.u, *bulk_, *contact_, [this] { return contact(); },
-      [this](const ContactResult& c) { return elastic_unloading_stiffness(*stiffness_, *contact_, c); });
+      [this](const ContactResult& c) { return unloading_stiffness(c); });
 }
 
-double Simulation::unloading_stiffness() const {
-  return elastic_unloading_stiffness(*stiffness_, *contact_, contact());
+double Simulation::unloading_stiffness() const { return unloading_stiffness(contact()); }
+
+double Simulation::unloading_stiffness(const ContactResult& c) const {
+  std::vector<double> internal_force(state_.u.size());
+  if (!contact_->rows_pin_unknowns()) bulk_->internal_force(state_.u.data(), internal_force.data());
+  return elastic_unloading_stiffness(*stiffness_, *contact_, state_.u.data(), internal_force.data(), state_.alpha, c);
 }
 
-double Simulation::contact_half_width() const {
-  return indentsim::contact_half_width(*contact_, contact());
-}
+double Simulation::contact_half_width() const { return contact().half_width; }
 
 SimulationState Simulation::state() const {
   SimulationState s = state_;
@@ -468,7 +469,7 @@ std::optional<Simulation::Sensitivities> Simulation::sensitivities(const std::ve
   to_system(state_.u, u_system);
   const std::size_t n = u_system.size();
   BulkOperator& bulk = system_bulk();
-  const NodeToRigidContact& contact = system_contact();
+  const ContactDiscretization& contact = system_contact();
   const StiffnessPattern& pattern = equations_->pattern();
   std::vector<double> force(n);
   bulk.internal_force(u_system.data(), force.data());
@@ -488,17 +489,23 @@ std::optional<Simulation::Sensitivities> Simulation::sensitivities(const std::ve
     for (std::size_t b = 1; b < base.size(); ++b)
       if (!plastic_->add_parameter_derivative(*slots, u_system.data(), base[b], d_force[b].data())) return std::nullopt;
   }
-  // Right-hand sides -dF/d(theta): an active contact row c (v + alpha - g) does not depend on theta.
+  // Right-hand sides -dF/d(theta): the contact rows' own derivative (contact_discretization.hpp).
   const auto& candidates = contact.candidates();
-  std::vector<char> active(candidates.size());
-  for (std::size_t k = 0; k < candidates.size(); ++k)
-    active[k] = NodeToRigidContact::active(candidates[k], force[candidates[k].equation], u_system[candidates[k].equation], state_.alpha);
+  const auto& rows = contact.row_equations();
+  std::vector<double> row_force(rows.size()), d_row_force(rows.size());
+  for (std::size_t k = 0; k < rows.size(); ++k) row_force[k] = force[rows[k]];
   std::vector<std::vector<double>> du = d_force;
-  for (auto& rhs : du) {
-    for (double& v : rhs) v = -v;
-    for (std::size_t k = 0; k < candidates.size(); ++k)
-      if (active[k]) rhs[candidates[k].equation] = 0.0;
+  for (std::size_t b = 0; b < du.size(); ++b) {
+    for (std::size_t k = 0; k < rows.size(); ++k) d_row_force[k] = d_force[b][rows[k]];
+    // The elastic stiffness is proportional to E and does not depend on the plastic law.
+    const double d_log_stiffness = base[b] == MaterialParameter::E ? 1.0 / m.E : 0.0;
+    contact.write_parameter_derivative_rows(u_system.data(), state_.alpha, row_force.data(), d_row_force.data(),
+                                            d_log_stiffness, du[b].data());
+    for (double& v : du[b]) v = -v;
   }
+  // P = -f sum r_k over the candidates carrying contact force.
+  const ContactResult contact_state = contact.evaluate(u_system.data(), force.data(), state_.alpha);
+  const std::vector<char>& active = contact_state.in_contact;
   newton_->solve_linearized(u_system, state_.alpha, du);
   // While loading this state is the peak of any unloading that follows.
   if (plastic_)
@@ -571,7 +578,7 @@ IncrementRecord Simulation::record(double wall_seconds, long iterations, long fa
   r.step = state_.rows++;
   r.alpha = state_.alpha;
   r.force = c.force;
-  r.half_width = indentsim::contact_half_width(*contact_, c);
+  r.half_width = c.half_width;
   r.contact_nodes = c.contact_nodes;
   r.newton_iterations = iterations;
   r.factorizations = factorizations;

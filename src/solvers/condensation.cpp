@@ -91,7 +91,7 @@ std::vector<char> near_field_equations(const Mesh& mesh, const std::vector<int>&
   return is_near;
 }
 
-FarFieldCondensation::FarFieldCondensation(const ElasticStiffness& stiffness, const NodeToRigidContact& contact,
+FarFieldCondensation::FarFieldCondensation(const ElasticStiffness& stiffness, const ContactDiscretization& contact,
                                            const NearField& near)
     : full_pattern_(stiffness.pattern()), full_values_(stiffness.values()) {
   const Mesh& mesh = stiffness.mesh();
@@ -227,7 +227,7 @@ FarFieldCondensation::FarFieldCondensation(const ElasticStiffness& stiffness, co
     c.equation = near_of_[c.equation];
     c.scale = values_[pattern_->diagonal_position(c.equation)];
   }
-  contact_ = std::make_unique<NodeToRigidContact>(contact.punch_shape(), contact.symmetry_factor(), std::move(candidates));
+  contact_ = contact.on_candidates(std::move(candidates));
 
   // The near elements (near_field_equations' columns and rows), as the near system's slots.
   const int top = mesh.elements_y() - 1;

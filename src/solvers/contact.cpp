@@ -14,36 +14,50 @@ int contact_candidate_count(const Mesh& mesh, const PunchShape& punch) {
   return count;  // beyond the punch's rim: never touched
 }
 
-NodeToRigidContact::NodeToRigidContact(const Mesh& mesh, std::shared_ptr<const PunchShape> punch,
-                                       const StiffnessPattern& pattern, const std::vector<double>& stiffness_values)
-    : punch_(std::move(punch)), symmetry_factor_(mesh.kinematics().symmetry_factor()) {
+std::vector<ContactCandidate> contact_candidates(const Mesh& mesh, const PunchShape& punch,
+                                                 const StiffnessPattern& pattern,
+                                                 const std::vector<double>& stiffness_values) {
+  std::vector<ContactCandidate> candidates;
   const int j = mesh.top_row();
-  const int count = contact_candidate_count(mesh, *punch_);
+  const int count = contact_candidate_count(mesh, punch);
   for (int i = 0; i < count; ++i) {
     const double x = mesh.x(i);
-    const double g = punch_->surface_height(x);
     ContactCandidate c;
     c.node = mesh.node(i, j);
     c.equation = mesh.equation(Mesh::dof_v(c.node));
     c.x = x;
-    c.surface_height = g;
+    c.surface_height = punch.surface_height(x);
     c.scale = stiffness_values[pattern.diagonal_position(c.equation)];
     c.tributary_measure = tributary_measure(mesh, i);
-    candidates_.push_back(c);
-    row_equations_.push_back(c.equation);
+    candidates.push_back(c);
   }
+  return candidates;
 }
 
-NodeToRigidContact::NodeToRigidContact(std::shared_ptr<const PunchShape> punch, double symmetry_factor,
-                                       std::vector<ContactCandidate> candidates)
+ContactDiscretization::ContactDiscretization(std::shared_ptr<const PunchShape> punch, double symmetry_factor,
+                                             std::vector<ContactCandidate> candidates)
     : punch_(std::move(punch)), symmetry_factor_(symmetry_factor), candidates_(std::move(candidates)) {
   for (const auto& c : candidates_) row_equations_.push_back(c.equation);
 }
 
+NodeToRigidContact::NodeToRigidContact(const Mesh& mesh, std::shared_ptr<const PunchShape> punch,
+                                       const StiffnessPattern& pattern, const std::vector<double>& stiffness_values)
+    : ContactDiscretization(punch, mesh.kinematics().symmetry_factor(),
+                            contact_candidates(mesh, *punch, pattern, stiffness_values)) {}
+
+NodeToRigidContact::NodeToRigidContact(std::shared_ptr<const PunchShape> punch, double symmetry_factor,
+                                       std::vector<ContactCandidate> candidates)
+    : ContactDiscretization(std::move(punch), symmetry_factor, std::move(candidates)) {}
+
+std::unique_ptr<ContactDiscretization> NodeToRigidContact::on_candidates(std::vector<ContactCandidate> candidates) const {
+  return std::make_unique<NodeToRigidContact>(punch_shape(), symmetry_factor(), std::move(candidates));
+}
+
 void NodeToRigidContact::write_residual_rows(const double* u, double alpha, const double* row_force,
                                              double* f) const {
-  for (std::size_t i = 0; i < candidates_.size(); ++i) {
-    const auto& c = candidates_[i];
+  const auto& cs = candidates();
+  for (std::size_t i = 0; i < cs.size(); ++i) {
+    const auto& c = cs[i];
     f[c.equation] = complementarity(c, row_force[i], u[c.equation], alpha);
   }
 }
@@ -53,8 +67,9 @@ std::uint64_t NodeToRigidContact::write_jacobian_rows(const double* u, double al
                                                       const std::vector<std::vector<std::int64_t>>& row_positions,
                                                       double* values) const {
   std::uint64_t signature = 0xcbf29ce484222325ull;  // FNV-1a over the active flags
-  for (std::size_t i = 0; i < candidates_.size(); ++i) {
-    const auto& c = candidates_[i];
+  const auto& cs = candidates();
+  for (std::size_t i = 0; i < cs.size(); ++i) {
+    const auto& c = cs[i];
     const bool on = active(c, row_force[i], u[c.equation], alpha);
     signature = (signature ^ (on ? 1u : 2u)) * 0x100000001b3ull;
     if (!on) continue;
@@ -65,9 +80,35 @@ std::uint64_t NodeToRigidContact::write_jacobian_rows(const double* u, double al
   return signature;
 }
 
-ContactResult evaluate_contact(const NodeToRigidContact& boundary, const double* u, const double* internal_force,
-                               double alpha) {
-  const auto& cs = boundary.candidates();
+void NodeToRigidContact::write_parameter_derivative_rows(const double* u, double alpha, const double* row_force,
+                                                         const double* d_row_force, double,
+                                                         double* df) const {
+  const auto& cs = candidates();
+  for (std::size_t i = 0; i < cs.size(); ++i)
+    df[cs[i].equation] = active(cs[i], row_force[i], u[cs[i].equation], alpha) ? 0.0 : d_row_force[i];
+}
+
+void NodeToRigidContact::write_depth_derivative_rows(const double* u, double alpha, const double* row_force,
+                                                     double* df) const {
+  const auto& cs = candidates();
+  for (std::size_t i = 0; i < cs.size(); ++i)
+    df[cs[i].equation] = active(cs[i], row_force[i], u[cs[i].equation], alpha) ? cs[i].scale : 0.0;
+}
+
+bool NodeToRigidContact::touches(const double* u, double alpha) const {
+  for (const ContactCandidate& c : candidates())
+    if (penetration(c, u[c.equation], alpha) >= 0.0) return true;
+  return false;
+}
+
+std::vector<double> NodeToRigidContact::admissibility_violation(const double* u, double alpha) const {
+  std::vector<double> f;
+  for (const auto& c : candidates()) f.push_back(std::max(0.0, c.scale * penetration(c, u[c.equation], alpha)));
+  return f;
+}
+
+ContactResult NodeToRigidContact::evaluate(const double* u, const double* internal_force, double alpha) const {
+  const auto& cs = candidates();
   ContactResult r;
   r.nodal_force.assign(cs.size(), 0.0);
   r.in_contact.assign(cs.size(), 0);
@@ -75,9 +116,9 @@ ContactResult evaluate_contact(const NodeToRigidContact& boundary, const double*
   double half_model_force = 0.0;
   for (std::size_t k = 0; k < cs.size(); ++k) {
     const double fk = internal_force[cs[k].equation];
-    const bool on = NodeToRigidContact::active(cs[k], fk, u[cs[k].equation], alpha);
+    const bool on = active(cs[k], fk, u[cs[k].equation], alpha);
     r.in_contact[k] = on;
-    r.gap[k] = on ? 0.0 : -NodeToRigidContact::penetration(cs[k], u[cs[k].equation], alpha);
+    r.gap[k] = on ? 0.0 : -penetration(cs[k], u[cs[k].equation], alpha);
     // docs/MODEL.md §3: P is the sum of the vertical reactions of all contact nodes, the axis node
     // included, times the symmetry factor (twice, for the half model of plane strain).  Open nodes carry no force (their residual is the
     // equilibrium residual itself), so summing -r_k over contact nodes is the reaction.
@@ -88,16 +129,19 @@ ContactResult evaluate_contact(const NodeToRigidContact& boundary, const double*
       r.outermost = static_cast<int>(k);
     }
   }
-  r.force = boundary.symmetry_factor() * half_model_force;
+  r.force = symmetry_factor() * half_model_force;
+  r.half_width = half_width(u, alpha, r);
   return r;
 }
 
-double contact_half_width(const NodeToRigidContact& boundary, const ContactResult& contact) {
-  const auto& cs = boundary.candidates();
-  const int n = contact.outermost;
-  const int candidates = static_cast<int>(cs.size());
+double NodeToRigidContact::half_width(const double*, double, const ContactResult& contact) const {
   // No force, no contact zone: at alpha = 0 the punch touches the axis node only.
-  if (n < 0 || !(contact.force > 0.0)) return 0.0;
+  if (contact.outermost < 0 || !(contact.force > 0.0)) return 0.0;
+  return contact_edge_from_open_side(candidates(), contact.gap, contact.outermost);
+}
+
+double contact_edge_from_open_side(const std::vector<ContactCandidate>& cs, const std::vector<double>& gap, int n) {
+  const int candidates = static_cast<int>(cs.size());
   const double x_n = cs[n].x;
   if (n + 1 >= candidates) return x_n;  // the rim node of a flat punch touches
   const double x_open = cs[n + 1].x;
@@ -107,7 +151,7 @@ double contact_half_width(const NodeToRigidContact& boundary, const ContactResul
   const int last = std::min(candidates - 1, n + 3);
   if (last < n + 2) return midpoint;
   double gap_scale = 0.0;
-  for (int k = n + 1; k <= last; ++k) gap_scale = std::max(gap_scale, contact.gap[k]);
+  for (int k = n + 1; k <= last; ++k) gap_scale = std::max(gap_scale, gap[k]);
   if (!(gap_scale > 0.0)) return midpoint;
   const double element = cs[n + 2].x - x_open;
 
@@ -115,7 +159,7 @@ double contact_half_width(const NodeToRigidContact& boundary, const ContactResul
   // residuals (w_k = y_k^2 on their squares).
   double sw = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
   for (int k = n + 1; k <= last; ++k) {
-    const double relative_gap = std::max(contact.gap[k], 0.0) / gap_scale;
+    const double relative_gap = std::max(gap[k], 0.0) / gap_scale;
     const double y = std::cbrt(relative_gap * relative_gap);
     const double xi = (cs[k].x - x_open) / element, w = y * y;
     sw += w;

@@ -5,11 +5,65 @@
 
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
+#include <Eigen/SparseLU>
 
 namespace indentsim {
 
-double elastic_unloading_stiffness(const ElasticStiffness& stiffness, const NodeToRigidContact& contact,
+namespace {
+
+// Rows that do not pin unknowns: the elastic stiffness with the contact's own Jacobian rows,
+// J w = -dF/d(alpha), and dP/d(alpha) = -f sum_k (K w)_k over the candidates.
+double linearized_unloading_stiffness(const ElasticStiffness& stiffness, const ContactDiscretization& contact,
+                                      const double* u, const double* internal_force, double alpha) {
+  const StiffnessPattern& pattern = stiffness.pattern();
+  const auto n = static_cast<Eigen::Index>(pattern.size());
+  const auto& rows = contact.row_equations();
+  std::vector<double> row_force(rows.size());
+  std::vector<std::vector<std::int64_t>> row_positions;
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    row_force[i] = internal_force[rows[i]];
+    row_positions.push_back(pattern.row_positions(rows[i]));
+  }
+  std::vector<double> jacobian = stiffness.values();
+  contact.write_jacobian_rows(u, alpha, row_force.data(), pattern, row_positions, jacobian.data());
+  std::vector<double> d_alpha(static_cast<std::size_t>(n), 0.0);
+  contact.write_depth_derivative_rows(u, alpha, row_force.data(), d_alpha.data());
+
+  std::vector<Eigen::Triplet<double>> entries;
+  entries.reserve(jacobian.size());
+  const auto& start = pattern.column_start();
+  const auto& row = pattern.row_index();
+  for (Eigen::Index j = 0; j < n; ++j)
+    for (std::int64_t p = start[static_cast<std::size_t>(j)]; p < start[static_cast<std::size_t>(j) + 1]; ++p)
+      entries.emplace_back(static_cast<Eigen::Index>(row[static_cast<std::size_t>(p)]), j,
+                           jacobian[static_cast<std::size_t>(p)]);
+  Eigen::SparseMatrix<double> J(n, n);
+  J.setFromTriplets(entries.begin(), entries.end());
+  Eigen::VectorXd rhs(n);
+  for (Eigen::Index i = 0; i < n; ++i) rhs[i] = -d_alpha[static_cast<std::size_t>(i)];
+  Eigen::VectorXd w;
+  if (contact.rows_keep_symmetry()) {
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> factor(J);
+    if (factor.info() != Eigen::Success) throw std::runtime_error("the elastic unloading stiffness could not be factored");
+    w = factor.solve(rhs);
+  } else {
+    Eigen::SparseLU<Eigen::SparseMatrix<double>> factor(J);
+    if (factor.info() != Eigen::Success) throw std::runtime_error("the elastic unloading stiffness could not be factored");
+    w = factor.solve(rhs);
+  }
+  std::vector<double> reaction(static_cast<std::size_t>(n));
+  pattern.multiply(stiffness.values(), w.data(), reaction.data());
+  double rate = 0.0;
+  for (int equation : rows) rate -= reaction[static_cast<std::size_t>(equation)];
+  return contact.symmetry_factor() * rate;
+}
+
+}  // namespace
+
+double elastic_unloading_stiffness(const ElasticStiffness& stiffness, const ContactDiscretization& contact,
+                                   const double* u, const double* internal_force, double alpha,
                                    const ContactResult& state) {
+  if (!contact.rows_pin_unknowns()) return linearized_unloading_stiffness(stiffness, contact, u, internal_force, alpha);
   const StiffnessPattern& pattern = stiffness.pattern();
   const std::vector<double>& values = stiffness.values();
   const auto n = static_cast<Eigen::Index>(pattern.size());

@@ -62,6 +62,10 @@ public:
   /// pressure into the node's force.  A length per unit thickness ((right - left) / 2), or the
   /// ring area 2 pi int N_x r dr -- not pi (r_+^2 - r_-^2), which is a third too small at the axis.
   virtual double tributary_measure(double left, double x, double right) const = 0;
+  /// The surface a unit length of the top line at abscissa x stands for: 1 (per unit thickness)
+  /// or the ring 2 pi x.  A traction t(x) on the top line makes the nodal forces
+  /// int t N_k density dx (tributary_measure is int N_k density dx).
+  virtual double surface_density(double x) const = 0;
   /// The size of a nodal force under a stress `stress` near the contact of radius `contact`
   /// (Newton's residual scale): stress x length in plane strain (per unit thickness, element
   /// size cancels against the strain's 1/h), stress x length x 2 pi r in axisymmetry.
@@ -96,6 +100,7 @@ public:
   double tributary_measure(double left, double x, double right) const override {
     return 0.5 * (x - left) + 0.5 * (right - x);
   }
+  double surface_density(double) const override { return 1.0; }
   std::string force_unit() const override { return "N/m"; }
   std::string name() const override { return "plane_strain"; }
   std::string out_of_plane_stress() const override { return "sigma33"; }
@@ -114,6 +119,7 @@ public:
   double symmetry_factor() const override { return 1.0; }
   double nodal_force_scale(double stress_times_length, double contact) const override;
   double tributary_measure(double left, double x, double right) const override;
+  double surface_density(double x) const override;
   std::string force_unit() const override { return "N"; }
   std::string name() const override { return "axisymmetric"; }
   std::string out_of_plane_stress() const override { return "sigma_hoop"; }

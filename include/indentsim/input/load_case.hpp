@@ -123,6 +123,19 @@ struct AnalysisInput {
   double indenter_nu = 0.07;                 ///< diamond
 };
 
+/// How the contact conditions become equations (docs/MODEL.md §3).
+enum class ContactDiscretizationChoice {
+  node_to_rigid,  ///< the seed paper's: a complementarity row per surface node
+  integrated_gap  ///< the penetration integrated over the surface segments, a penalty pressure
+};
+
+struct ContactInput {
+  ContactDiscretizationChoice discretization = ContactDiscretizationChoice::node_to_rigid;
+  /// kappa of integrated_gap's penalty eps = kappa c / m (a node's stiffness over its surface):
+  /// the penetration under a pressure p is about p h / (kappa E*).
+  double penalty = 100.0;
+};
+
 struct LoadCase {
   std::string source = "<defaults>";  ///< file it was read from, for messages
   GeometryInput geometry;
@@ -132,6 +145,7 @@ struct LoadCase {
   MeshInput mesh;
   OutputInput output;
   SolverInput solver;
+  ContactInput contact;
   AnalysisInput analysis;
 
   double max_depth() const;

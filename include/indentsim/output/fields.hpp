@@ -45,7 +45,7 @@ std::string profiles_csv(const Mesh& mesh, const std::vector<int>& lines, const 
 
 /// A VTK XML unstructured grid of the current state.
 std::string vtu_document(const FieldFrame& frame, const Mesh& mesh, const double* u, const BulkModel& bulk,
-                         const NodalStresses& nodal, const NodeToRigidContact& contact, const ContactResult& contact_state);
+                         const NodalStresses& nodal, const ContactDiscretization& contact, const ContactResult& contact_state);
 
 /// Keeps DIR/fields.pvd listing every VTU written so far.  The time value of each is the
 /// increment number, which grows strictly along a run: the depth alpha does not (a load history

@@ -12,7 +12,7 @@
 #include "indentsim/geometry/mesh.hpp"
 #include "indentsim/simulation/load_stepping.hpp"
 #include "indentsim/solvers/assembly.hpp"
-#include "indentsim/solvers/contact.hpp"
+#include "indentsim/solvers/contact_discretization.hpp"
 
 namespace indentsim {
 
@@ -20,7 +20,7 @@ class IncrementSnapshot {
 public:
   IncrementSnapshot(const IncrementRecord& record, double alpha, double free_surface_depth, const Mesh& mesh,
                     const std::vector<double>& displacement, const BulkModel& bulk,
-                    const NodeToRigidContact& contact_boundary, std::function<ContactResult()> evaluate_contact,
+                    const ContactDiscretization& contact_boundary, std::function<ContactResult()> evaluate_contact,
                     std::function<double(const ContactResult&)> evaluate_unloading_stiffness)
       : record(record),
         alpha(alpha),
@@ -38,7 +38,7 @@ public:
   const Mesh& mesh;
   const std::vector<double>& displacement;
   const BulkModel& bulk;
-  const NodeToRigidContact& contact_boundary;
+  const ContactDiscretization& contact_boundary;
 
   const ContactResult& contact() const {
     if (!contact_) contact_ = evaluate_contact_();
@@ -47,7 +47,7 @@ public:
   /// -dP/d(alpha) of the elastic unloading tangent at this state (unloading_stiffness.hpp).
   double unloading_stiffness() const { return evaluate_unloading_stiffness_(contact()); }
   /// The contact half-width (radius) of the contact solution [m].
-  double contact_half_width() const { return indentsim::contact_half_width(contact_boundary, contact()); }
+  double contact_half_width() const { return contact().half_width; }
 
 private:
   std::function<ContactResult()> evaluate_contact_;

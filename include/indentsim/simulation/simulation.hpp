@@ -49,7 +49,7 @@ public:
   /// Every choice of the run, "auto" resolved (resolve_choices).
   const RunConfiguration& configuration() const { return config_; }
   const Mesh& mesh() const { return *mesh_; }
-  const NodeToRigidContact& contact_boundary() const { return *contact_; }
+  const ContactDiscretization& contact_boundary() const { return *contact_; }
   const BulkModel& bulk() const { return *bulk_; }
   /// The inelastic model, or nullptr for an elastic load case (which never enters plasticity code).
   const InelasticBulk* plasticity() const { return plastic_.get(); }
@@ -92,6 +92,8 @@ public:
   double contact_half_width() const;
   /// The exact unloading stiffness -dP/d(alpha) at the current state (unloading_stiffness.hpp).
   double unloading_stiffness() const;
+  /// The same of a contact state `c` evaluated at the current state.
+  double unloading_stiffness(const ContactResult& c) const;
   /// The depth at which the punch would first touch the current surface, max_k (-v_k - g(x_k)):
   /// after separation, the residual depth of the imprint where the punch left it.
   double free_surface_depth() const;
@@ -171,7 +173,7 @@ private:
   BulkOperator& system_bulk();
   BulkOperator& system_elastic_bulk();
   /// The contact rows of the Newton system (the condensed near field's candidates, or all).
-  const NodeToRigidContact& system_contact() const { return condensation_ ? condensation_->contact() : *contact_; }
+  const ContactDiscretization& system_contact() const { return condensation_ ? condensation_->contact() : *contact_; }
   /// The Newton system's residual at the whole-mesh displacement u, max |F_i| / force_scale.
   double system_residual(const std::vector<double>& u, double alpha, double force_scale);
   void to_system(const std::vector<double>& u, std::vector<double>& u_system) const;
@@ -189,7 +191,7 @@ private:
   std::unique_ptr<ElasticStiffness> stiffness_;
   std::unique_ptr<InelasticBulk> plastic_;
   BulkModel* bulk_ = nullptr;  // stiffness_ or plastic_
-  std::unique_ptr<NodeToRigidContact> contact_;
+  std::unique_ptr<ContactDiscretization> contact_;
   NewtonSettings settings_;
   std::unique_ptr<FarFieldCondensation> condensation_;      // null when the whole mesh is solved
   std::unique_ptr<CondensedBulk> condensed_bulk_, condensed_elastic_;

@@ -65,7 +65,7 @@ public:
   /// Factors K_FF and forms K_red.  `contact` holds the candidates of the whole mesh; those among
   /// the first near.contact_nodes surface nodes become the condensed system's candidates.
   /// Throws std::runtime_error if K_FF is not positive definite (a far field not held by the base).
-  FarFieldCondensation(const ElasticStiffness& stiffness, const NodeToRigidContact& contact, const NearField& near);
+  FarFieldCondensation(const ElasticStiffness& stiffness, const ContactDiscretization& contact, const NearField& near);
   ~FarFieldCondensation();
   FarFieldCondensation(const FarFieldCondensation&) = delete;
   FarFieldCondensation& operator=(const FarFieldCondensation&) = delete;
@@ -78,7 +78,7 @@ public:
   /// K_red in pattern().
   const std::vector<double>& values() const { return values_; }
   /// The contact candidates in the condensed numbering, scaled by K_red's diagonal.
-  const NodeToRigidContact& contact() const { return *contact_; }
+  const ContactDiscretization& contact() const { return *contact_; }
   const std::vector<ElementSlot>& elements() const { return elements_; }
   /// Free equation of each condensed unknown.
   const std::vector<int>& near_equations() const { return near_equation_; }
@@ -98,7 +98,7 @@ private:
   std::vector<int> interface_;       // condensed unknowns coupled to the far field
   std::unique_ptr<StiffnessPattern> pattern_;
   std::vector<double> values_;
-  std::unique_ptr<NodeToRigidContact> contact_;
+  std::unique_ptr<ContactDiscretization> contact_;
   std::vector<ElementSlot> elements_;
   std::unique_ptr<FarFactor> far_;
 };

@@ -69,7 +69,7 @@ public:
   void residual(const double* u, double alpha, double* f) override;
   void jacobian(const double* u, double alpha, double* values) override;
   bool pivot_reference(double* values) override;
-  bool symmetric_but_pinned_rows() const override { return contact_.rows_pin_unknowns(); }
+  bool symmetric_but_pinned_rows() const override { return contact_.rows_keep_symmetry(); }
 
 private:
   const StiffnessPattern& pattern_;

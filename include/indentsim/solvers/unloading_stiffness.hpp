@@ -8,13 +8,20 @@
 //   K_ff w_f = -K_fA w_A,   w_A = -1,   S = f sum_{k in A} -(K w)_k   (f the symmetry factor),
 // one sparse Cholesky solve (Eigen's SimplicialLDLT) on the whole mesh -- no finite difference,
 // no dependence on the increment size.  A flat punch included: its rim node is in A.
+//
+// A discretization whose rows do not pin unknowns (the integrated gap's penalty) linearizes its
+// own rows instead: J w = -dF/d(alpha) with J the elastic stiffness whose contact rows are the
+// discretization's Jacobian rows at the state, and S = -f sum_k (K w)_k over the candidates
+// (the rows without contact force hold (K w)_k = 0).
 #include "indentsim/solvers/assembly.hpp"
-#include "indentsim/solvers/contact.hpp"
+#include "indentsim/solvers/contact_discretization.hpp"
 
 namespace indentsim {
 
 /// S [N/m in axisymmetry, N/m per m in plane strain] for the contact set of `state`.
-double elastic_unloading_stiffness(const ElasticStiffness& stiffness, const NodeToRigidContact& contact,
+/// `u` and `internal_force` are the state's displacement and internal force on the whole mesh.
+double elastic_unloading_stiffness(const ElasticStiffness& stiffness, const ContactDiscretization& contact,
+                                   const double* u, const double* internal_force, double alpha,
                                    const ContactResult& state);
 
 }  // namespace indentsim
