@@ -466,6 +466,24 @@ const std::vector<KeyDeclaration>& key_declarations() {
                             "integrated_gap's penalty over a surface node's own stiffness: the penetration under a "
                             "pressure p is about p h / (penalty E*)"},
                            [](auto& c) -> auto& { return c.contact.penalty; }));
+    {
+      KeyDeclaration friction{"contact", "friction", "number or \"sticking\"", ">= 0", "",
+                              "Coulomb's friction coefficient mu between specimen and punch (0: frictionless; "
+                              "\"sticking\": no slip once in contact); node_to_rigid only, KLU only unless sticking"};
+      friction.read = [](const Reader& r, LoadCase& lc) {
+        r.read_number_or_word("contact", "friction", "sticking", std::numeric_limits<double>::infinity(),
+                              lc.contact.friction);
+      };
+      friction.write = [](const LoadCase& lc) -> std::optional<std::string> {
+        return std::isinf(lc.contact.friction) ? std::string("\"sticking\"") : toml_number(lc.contact.friction);
+      };
+      // ">= 0" with "sticking" read as +infinity, which a one-sided interval's check would refuse.
+      friction.check = [](const LoadCase& lc) {
+        if (!(lc.contact.friction >= 0.0))
+          throw InputError(lc.source, "contact.friction", fmt::format("must be >= 0 (got {})", lc.contact.friction));
+      };
+      k.push_back(friction);
+    }
     return k;
   }();
   return keys;
@@ -585,7 +603,9 @@ std::optional<PlausibleMagnitudes> plausible_magnitudes(const std::string& key) 
 std::string first_physics_difference(const LoadCase& a, const LoadCase& b) {
   for (const auto& key : key_declarations()) {
     const std::string section = key.section;
-    if (section != "geometry" && section != "punch" && section != "material" && section != "mesh") continue;
+    if (section != "geometry" && section != "punch" && section != "material" && section != "mesh" &&
+        section != "contact")
+      continue;
     if (key.derived) continue;
     if (key.write(a) != key.write(b)) return section + "." + key.name;
   }

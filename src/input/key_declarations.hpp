@@ -250,6 +250,20 @@ public:
     load.increments = total;
   }
 
+  /// A finite number, or `word` (stored as `word_value`).
+  void read_number_or_word(const std::string& section, const std::string& key, const char* word, double word_value,
+                           double& target) const {
+    const toml::node* node = find(section, key);
+    if (!node) return;
+    if (node->is_string()) {
+      if (node->value_exact<std::string>() != word)
+        fail(section + "." + key, fmt::format("must be a number or \"{}\"", word));
+      target = word_value;
+      return;
+    }
+    read_number(section, key, target);
+  }
+
   /// A count >= 1 or the word "all" (stored as 0).
   void read_count_or_all(const std::string& section, const std::string& key, int& target) const {
     const toml::node* node = find(section, key);

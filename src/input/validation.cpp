@@ -112,6 +112,14 @@ void validate(const LoadCase& lc) {
                                            punch.tip_radius, cap, lc.geometry.lx));
   }
   if (punch.shape == PunchShapeKind::profile && !lc.load.path.empty()) validate_profile(lc, true);
+  // Friction's rows are written beside node-to-rigid's normal rows (docs/MODEL.md §3.3); a finite
+  // coefficient's slip rows are unsymmetric, which CHOLMOD's Cholesky cannot factor.
+  if (lc.contact.friction > 0.0 && lc.contact.discretization != ContactDiscretizationChoice::node_to_rigid)
+    fail("contact.friction", "Coulomb friction is implemented with contact.discretization = \"node_to_rigid\" only");
+  if (lc.contact.friction > 0.0 && std::isfinite(lc.contact.friction) && lc.solver.linear == LinearSolverChoice::cholmod)
+    fail("solver.linear", fmt::format("\"cholmod\" cannot factor the unsymmetric rows of sliding friction "
+                                      "(contact.friction = {}): use \"klu\" or \"auto\"",
+                                      lc.contact.friction));
 
   const auto& path = lc.load.path;
   if (path.size() < 2) fail("load.path", "needs at least two waypoints, starting at 0");

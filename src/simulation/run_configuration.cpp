@@ -223,13 +223,15 @@ RunConfiguration resolve_choices(const LoadCase& lc, const RunPlan& plan, const 
     }
   }
   c.unknowns = mesh.equations();
-  std::vector<int> candidate_equations;
+  std::vector<int> candidate_equations, tangential_equations;
   const int candidates = contact_candidate_count(mesh, *make_punch(lc.punch));
-  for (int i = 0; i < candidates; ++i)
+  for (int i = 0; i < candidates; ++i) {
     candidate_equations.push_back(mesh.equation(Mesh::dof_v(mesh.node(i, mesh.top_row()))));
+    if (lc.contact.friction > 0.0) tangential_equations.push_back(mesh.equation(Mesh::dof_u(mesh.node(i, mesh.top_row()))));
+  }
   const auto unknowns_of = [&](const NearField& near) -> std::int64_t {
     if (!near.condensed) return c.unknowns;
-    const std::vector<char> is_near = near_field_equations(mesh, candidate_equations, near);
+    const std::vector<char> is_near = near_field_equations(mesh, candidate_equations, near, tangential_equations);
     return std::count(is_near.begin(), is_near.end(), char{1});
   };
   c.system_unknowns = unknowns_of(c.near_field);
@@ -245,6 +247,8 @@ RunConfiguration resolve_choices(const LoadCase& lc, const RunPlan& plan, const 
     largest = unknowns_of(deepest);
   }
   c.linear_solver = choose_linear_solver(lc.solver.linear, static_cast<int>(largest));
+  // Sliding friction's rows are unsymmetric (docs/MODEL.md §3.3): only KLU factors them.
+  if (lc.contact.friction > 0.0 && std::isfinite(lc.contact.friction)) c.linear_solver = LinearSolverKind::klu;
   c.companion_contact_nodes = companion_contact_nodes(lc);
   return c;
 }

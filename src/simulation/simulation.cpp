@@ -1,5 +1,6 @@
 #include "indentsim/simulation/simulation.hpp"
 #include "indentsim/solvers/unloading_stiffness.hpp"
+#include "indentsim/solvers/coulomb_contact.hpp"
 #include "indentsim/solvers/integrated_gap_contact.hpp"
 #include "indentsim/base/worker_threads.hpp"
 
@@ -86,6 +87,9 @@ void Simulation::build(const RunConfiguration& configuration, const std::optiona
   if (load_case_.contact.discretization == ContactDiscretizationChoice::integrated_gap)
     contact_ = std::make_unique<IntegratedGapContact>(*mesh_, make_punch(load_case_.punch), *pattern_,
                                                       stiffness_->values(), load_case_.contact.penalty);
+  else if (load_case_.contact.friction > 0.0)
+    contact_ = std::make_unique<CoulombNodeToRigidContact>(*mesh_, make_punch(load_case_.punch), *pattern_,
+                                                           stiffness_->values(), load_case_.contact.friction);
   else
     contact_ = std::make_unique<NodeToRigidContact>(*mesh_, make_punch(load_case_.punch), *pattern_, stiffness_->values());
   settings_.displacement_scale = load_case_.max_depth();
@@ -200,6 +204,8 @@ bool Simulation::solve_at(double trial, SolveCounters& counters, const std::func
   // Laws that follow the global load history (Ilyushin's unloading rule) need to know whether
   // this trial goes beyond the deepest point so far.
   if (plastic_) plastic_->set_loading(trial >= state_.deepest);
+  // Friction's slip is measured from the committed state this (sub-)increment starts from.
+  hold_committed_contact_state(state_.u);
   const int plain_budget = std::max(8, load_case_.solver.max_newton / 4);
   for (Globalization g : {Globalization::line_search, Globalization::none}) {
     if (g == Globalization::line_search || !last_report_.stopped_while_converging)
@@ -375,11 +381,24 @@ double scaled_max(const std::vector<double>& f, double force_scale) {
 }  // namespace
 
 double Simulation::equilibrium_residual() {
+  // The increment that converged u started from u_previous (from the unloaded state at first).
+  hold_committed_contact_state(state_.has_previous ? state_.u_previous : std::vector<double>(state_.u.size(), 0.0));
   return system_residual(state_.u, state_.alpha, state_.residual_scale);
 }
 
+void Simulation::hold_committed_contact_state(const std::vector<double>& u) {
+  if (!contact_->carries_history()) return;
+  contact_->hold_committed_state(u.data());
+  if (!condensation_) return;
+  std::vector<double> u_system;
+  to_system(u, u_system);
+  condensation_->contact().hold_committed_state(u_system.data());
+}
+
 double Simulation::previous_state_residual() {
-  if (!plastic_) return system_residual(state_.u_previous, state_.alpha_previous, state_.residual_scale_previous);
+  // The previous state's own increment started from a state the checkpoint does not hold: for a
+  // history-carrying bulk or contact, what the contact alone proves.
+  if (!plastic_ && !contact_->carries_history()) return system_residual(state_.u_previous, state_.alpha_previous, state_.residual_scale_previous);
   std::vector<double> u_system;
   to_system(state_.u_previous, u_system);
   return scaled_max(system_contact().admissibility_violation(u_system.data(), state_.alpha_previous),
@@ -404,7 +423,8 @@ double Simulation::unloading_stiffness() const { return unloading_stiffness(cont
 
 double Simulation::unloading_stiffness(const ContactResult& c) const {
   std::vector<double> internal_force(state_.u.size());
-  if (!contact_->rows_pin_unknowns()) bulk_->internal_force(state_.u.data(), internal_force.data());
+  if (!contact_->rows_pin_unknowns() || contact_->carries_history())
+    bulk_->internal_force(state_.u.data(), internal_force.data());
   return elastic_unloading_stiffness(*stiffness_, *contact_, state_.u.data(), internal_force.data(), state_.alpha, c);
 }
 
@@ -465,6 +485,7 @@ std::optional<Simulation::Sensitivities> Simulation::sensitivities(const std::ve
   const MaterialInput& m = load_case_.material;
   for (MaterialParameter p : parameters)
     if (p == MaterialParameter::nu) return std::nullopt;  // nu also shapes the condensed far field
+  if (contact_->carries_history()) return std::nullopt;  // friction's slip history: its derivative is not carried
   std::vector<double> u_system;
   to_system(state_.u, u_system);
   const std::size_t n = u_system.size();

@@ -76,7 +76,7 @@ std::size_t schur_block_columns(std::size_t far_unknowns) {
 }  // namespace
 
 std::vector<char> near_field_equations(const Mesh& mesh, const std::vector<int>& candidate_equations,
-                                       const NearField& near) {
+                                       const NearField& near, const std::vector<int>& tangential_equations) {
   // The near field: all unknowns of the near elements, the vertical unknowns of the candidates.
   std::vector<char> is_near(static_cast<std::size_t>(mesh.equations()), 0);
   const int top = mesh.elements_y() - 1;
@@ -88,6 +88,8 @@ std::vector<char> near_field_equations(const Mesh& mesh, const std::vector<int>&
         if (mesh.equation(dof) >= 0) is_near[mesh.equation(dof)] = 1;
   for (std::size_t k = 0; k < candidate_equations.size() && static_cast<int>(k) < near.contact_nodes; ++k)
     is_near[candidate_equations[k]] = 1;
+  for (std::size_t k = 0; k < tangential_equations.size() && static_cast<int>(k) < near.contact_nodes; ++k)
+    if (tangential_equations[k] >= 0) is_near[tangential_equations[k]] = 1;
   return is_near;
 }
 
@@ -100,13 +102,14 @@ FarFieldCondensation::FarFieldCondensation(const ElasticStiffness& stiffness, co
   const auto& rowind = full_pattern_.row_index();
 
   std::vector<ContactCandidate> candidates;
-  std::vector<int> candidate_equations;
+  std::vector<int> candidate_equations, tangential_equations;
   for (const ContactCandidate& c : contact.candidates()) {
     if (static_cast<int>(candidates.size()) >= near.contact_nodes) break;  // node i is candidate i
     candidates.push_back(c);
     candidate_equations.push_back(c.equation);
+    if (contact.has_tangential_rows()) tangential_equations.push_back(c.tangential_equation);
   }
-  const std::vector<char> is_near = near_field_equations(mesh, candidate_equations, near);
+  const std::vector<char> is_near = near_field_equations(mesh, candidate_equations, near, tangential_equations);
   if (is_near.size() != n) throw std::invalid_argument("the near field's mesh is not the stiffness' mesh");
 
   near_of_.assign(n, -1);
@@ -226,6 +229,10 @@ FarFieldCondensation::FarFieldCondensation(const ElasticStiffness& stiffness, co
   for (ContactCandidate& c : candidates) {
     c.equation = near_of_[c.equation];
     c.scale = values_[pattern_->diagonal_position(c.equation)];
+    if (c.tangential_equation >= 0) {
+      c.tangential_equation = near_of_[c.tangential_equation];  // -1 when the contact writes no row for it
+      c.tangential_scale = c.tangential_equation >= 0 ? values_[pattern_->diagonal_position(c.tangential_equation)] : 0.0;
+    }
   }
   contact_ = contact.on_candidates(std::move(candidates));
 

@@ -29,6 +29,8 @@ std::vector<ContactCandidate> contact_candidates(const Mesh& mesh, const PunchSh
     c.surface_height = punch.surface_height(x);
     c.scale = stiffness_values[pattern.diagonal_position(c.equation)];
     c.tributary_measure = tributary_measure(mesh, i);
+    c.tangential_equation = mesh.equation(Mesh::dof_u(c.node));
+    if (c.tangential_equation >= 0) c.tangential_scale = stiffness_values[pattern.diagonal_position(c.tangential_equation)];
     candidates.push_back(c);
   }
   return candidates;
@@ -36,8 +38,15 @@ std::vector<ContactCandidate> contact_candidates(const Mesh& mesh, const PunchSh
 
 ContactDiscretization::ContactDiscretization(std::shared_ptr<const PunchShape> punch, double symmetry_factor,
                                              std::vector<ContactCandidate> candidates)
+    : ContactDiscretization(std::move(punch), symmetry_factor, std::move(candidates), false) {}
+
+ContactDiscretization::ContactDiscretization(std::shared_ptr<const PunchShape> punch, double symmetry_factor,
+                                             std::vector<ContactCandidate> candidates, bool tangential_rows)
     : punch_(std::move(punch)), symmetry_factor_(symmetry_factor), candidates_(std::move(candidates)) {
   for (const auto& c : candidates_) row_equations_.push_back(c.equation);
+  if (tangential_rows)
+    for (const auto& c : candidates_)
+      if (c.tangential_equation >= 0) row_equations_.push_back(c.tangential_equation);
 }
 
 NodeToRigidContact::NodeToRigidContact(const Mesh& mesh, std::shared_ptr<const PunchShape> punch,
@@ -113,6 +122,8 @@ ContactResult NodeToRigidContact::evaluate(const double* u, const double* intern
   r.nodal_force.assign(cs.size(), 0.0);
   r.in_contact.assign(cs.size(), 0);
   r.gap.assign(cs.size(), 0.0);
+  r.tangential_force.assign(cs.size(), 0.0);
+  r.sliding.assign(cs.size(), 0);
   double half_model_force = 0.0;
   for (std::size_t k = 0; k < cs.size(); ++k) {
     const double fk = internal_force[cs[k].equation];

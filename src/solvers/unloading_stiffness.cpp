@@ -58,12 +58,74 @@ double linearized_unloading_stiffness(const ElasticStiffness& stiffness, const C
   return contact.symmetry_factor() * rate;
 }
 
+// Rows that carry history (friction): the one-sided derivative of an increment from the state to
+// alpha - delta on the elastic unloading operator, r(u + w) = r(u) + K w.  Its equations are
+// piecewise linear in w, so semi-smooth Newton reaches their exact solution in a few steps: it
+// stops when the branches at the new w are those the step was solved with.  On a fixed set of
+// branches w is proportional to delta, so S = f sum_k (K w)_k / delta over the contact nodes,
+// without a difference of forces; delta only has to be small enough that no branch of the state
+// itself changes (a contact node with less than 1e-6 of its force to lose).
+double incremental_unloading_stiffness(const ElasticStiffness& stiffness, const ContactDiscretization& at_state,
+                                       const double* u, const double* internal_force, double alpha) {
+  if (!(alpha > 0.0)) return 0.0;
+  const std::unique_ptr<ContactDiscretization> reversed = at_state.at_load_reversal(u);
+  const ContactDiscretization& contact = reversed ? *reversed : at_state;
+  const StiffnessPattern& pattern = stiffness.pattern();
+  const auto n = static_cast<std::size_t>(pattern.size());
+  const auto& rows = contact.row_equations();
+  std::vector<std::vector<std::int64_t>> row_positions;
+  for (int equation : rows) row_positions.push_back(pattern.row_positions(equation));
+  const double delta = 1e-6 * alpha, target = alpha - delta;
+  std::vector<double> w(n, 0.0), x(n), kw(n), f(n), row_force(rows.size()), jacobian;
+  const auto evaluate = [&] {
+    pattern.multiply(stiffness.values(), w.data(), kw.data());
+    for (std::size_t i = 0; i < n; ++i) {
+      x[i] = u[i] + w[i];
+      f[i] = internal_force[i] + kw[i];
+    }
+    for (std::size_t i = 0; i < rows.size(); ++i) row_force[i] = f[static_cast<std::size_t>(rows[i])];
+    jacobian = stiffness.values();
+    return contact.write_jacobian_rows(x.data(), target, row_force.data(), pattern, row_positions, jacobian.data());
+  };
+  std::uint64_t branches = evaluate();
+  constexpr int max_steps = 50;
+  for (int step = 0;; ++step) {
+    if (step == max_steps)
+      throw std::runtime_error("the unloading stiffness's increment found no consistent contact branches");
+    contact.write_residual_rows(x.data(), target, row_force.data(), f.data());
+    std::vector<Eigen::Triplet<double>> entries;
+    entries.reserve(jacobian.size());
+    const auto& start = pattern.column_start();
+    const auto& row = pattern.row_index();
+    for (std::size_t j = 0; j < n; ++j)
+      for (std::int64_t p = start[j]; p < start[j + 1]; ++p)
+        entries.emplace_back(static_cast<Eigen::Index>(row[static_cast<std::size_t>(p)]), static_cast<Eigen::Index>(j),
+                             jacobian[static_cast<std::size_t>(p)]);
+    Eigen::SparseMatrix<double> J(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
+    J.setFromTriplets(entries.begin(), entries.end());
+    Eigen::SparseLU<Eigen::SparseMatrix<double>> factor(J);
+    if (factor.info() != Eigen::Success) throw std::runtime_error("the elastic unloading stiffness could not be factored");
+    const Eigen::VectorXd dw = factor.solve(-Eigen::Map<const Eigen::VectorXd>(f.data(), static_cast<Eigen::Index>(n)));
+    for (std::size_t i = 0; i < n; ++i) w[i] += dw[static_cast<Eigen::Index>(i)];
+    const std::uint64_t next = evaluate();
+    if (next == branches) break;  // w solves the equations of its own branches
+    branches = next;
+  }
+  const ContactResult state = contact.evaluate(x.data(), f.data(), target);
+  double rate = 0.0;
+  for (std::size_t k = 0; k < contact.candidates().size(); ++k)
+    if (state.in_contact[k]) rate += kw[static_cast<std::size_t>(contact.candidates()[k].equation)];
+  return contact.symmetry_factor() * rate / delta;
+}
+
 }  // namespace
 
 double elastic_unloading_stiffness(const ElasticStiffness& stiffness, const ContactDiscretization& contact,
                                    const double* u, const double* internal_force, double alpha,
                                    const ContactResult& state) {
-  if (!contact.rows_pin_unknowns()) return linearized_unloading_stiffness(stiffness, contact, u, internal_force, alpha);
+  if (contact.carries_history()) return incremental_unloading_stiffness(stiffness, contact, u, internal_force, alpha);
+  if (!contact.rows_pin_unknowns())
+    return linearized_unloading_stiffness(stiffness, contact, u, internal_force, alpha);
   const StiffnessPattern& pattern = stiffness.pattern();
   const std::vector<double>& values = stiffness.values();
   const auto n = static_cast<Eigen::Index>(pattern.size());

@@ -134,6 +134,9 @@ struct ContactInput {
   /// kappa of integrated_gap's penalty eps = kappa c / m (a node's stiffness over its surface):
   /// the penetration under a pressure p is about p h / (kappa E*).
   double penalty = 100.0;
+  /// Coulomb's coefficient mu between specimen and punch (docs/MODEL.md §3.3): 0 frictionless,
+  /// +infinity sticking.
+  double friction = 0.0;
 };
 
 struct LoadCase {

@@ -174,6 +174,9 @@ private:
   BulkOperator& system_elastic_bulk();
   /// The contact rows of the Newton system (the condensed near field's candidates, or all).
   const ContactDiscretization& system_contact() const { return condensation_ ? condensation_->contact() : *contact_; }
+  /// Hands the committed whole-mesh displacement u to contact rows that carry history (friction),
+  /// the mesh's and the Newton system's.
+  void hold_committed_contact_state(const std::vector<double>& u);
   /// The Newton system's residual at the whole-mesh displacement u, max |F_i| / force_scale.
   double system_residual(const std::vector<double>& u, double alpha, double force_scale);
   void to_system(const std::vector<double>& u, std::vector<double>& u_system) const;

@@ -56,9 +56,11 @@ struct PlasticZoneGrowth {
 
 /// The equations a near field holds, as flags over the mesh's equations: every unknown of its
 /// element columns and rows (from the axis and the surface), and the vertical unknowns of its
-/// first contact_nodes contact candidates (`candidate_equations`, from the axis).
+/// first contact_nodes contact candidates (`candidate_equations`, from the axis), with their
+/// horizontal unknowns where the contact writes rows for them (friction: `tangential_equations`,
+/// per candidate, -1 for none; empty for frictionless contact).
 std::vector<char> near_field_equations(const Mesh& mesh, const std::vector<int>& candidate_equations,
-                                       const NearField& near);
+                                       const NearField& near, const std::vector<int>& tangential_equations = {});
 
 class FarFieldCondensation {
 public:
@@ -79,6 +81,7 @@ public:
   const std::vector<double>& values() const { return values_; }
   /// The contact candidates in the condensed numbering, scaled by K_red's diagonal.
   const ContactDiscretization& contact() const { return *contact_; }
+  ContactDiscretization& contact() { return *contact_; }
   const std::vector<ElementSlot>& elements() const { return elements_; }
   /// Free equation of each condensed unknown.
   const std::vector<int>& near_equations() const { return near_equation_; }

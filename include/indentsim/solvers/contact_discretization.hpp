@@ -33,6 +33,10 @@ struct ContactCandidate {
   double surface_height = 0.0; ///< g(x) [m]
   double scale = 0.0;          ///< c_k = K_kk [N/m^2]
   double tributary_measure = 0.0;  ///< the node's strip of surface (tributary_measure of layer_forces.hpp) [m or m^2]
+  /// Equation of the node's horizontal (radial) unknown, -1 where a symmetry condition fixes it
+  /// (the axis node); its diagonal stiffness.  Only frictional rows use them.
+  int tangential_equation = -1;
+  double tangential_scale = 0.0;  ///< c^t_k = K_tt [N/m^2]
 };
 
 /// v + alpha - g: how far a candidate is past the punch's surface (minus the gap d) [m].
@@ -57,6 +61,10 @@ struct ContactResult {
   std::vector<double> nodal_force;  ///< lambda_k >= 0 per candidate: its reaction -r_k [N/m or N]
   std::vector<char> in_contact;     ///< per candidate: carries contact force
   std::vector<double> gap;          ///< d_k = g_k - alpha - v_k per candidate [m] (0 on node-to-rigid contact)
+  /// q_k per candidate: the tangential force the punch exerts, along +x [N/m or N] (0 without
+  /// friction and on open nodes).
+  std::vector<double> tangential_force;
+  std::vector<char> sliding;  ///< per candidate: in contact with |q_k| = mu lambda_k (friction only)
 };
 
 /// Contact half-width (radius) a from the discrete solution, resolved inside the element where the
@@ -93,8 +101,24 @@ public:
   const std::shared_ptr<const PunchShape>& punch_shape() const { return punch_; }
   /// The body's force over the modelled part's nodal forces (Kinematics::symmetry_factor).
   double symmetry_factor() const { return symmetry_factor_; }
-  /// The equations whose rows the discretization writes: row i is candidate i's vertical unknown.
+  /// The equations whose rows the discretization writes: row i < candidates().size() is candidate
+  /// i's vertical unknown; a frictional discretization appends the free horizontal unknowns of
+  /// its candidates, in their order.
   const std::vector<int>& row_equations() const { return row_equations_; }
+  /// True when the rows include the candidates' horizontal unknowns (friction): a condensed near
+  /// field must keep them.
+  bool has_tangential_rows() const { return row_equations_.size() > candidates_.size(); }
+
+  /// Rows that depend on the committed state the increment starts from (friction's slip), which
+  /// they read from `u_committed` in this discretization's numbering: called before every Newton
+  /// solve and residual check.  Nothing for rows without history.
+  virtual void hold_committed_state(const double* /*u_committed*/) {}
+  /// True when the rows carry a history whose derivative under a material parameter is not
+  /// carried (friction): the forward sensitivities are then unavailable.
+  virtual bool carries_history() const { return false; }
+  /// The discretization of an increment that unloads from u (the exact unloading stiffness of
+  /// rows that carry history: friction's, with u committed); nullptr for the rows as they are.
+  virtual std::unique_ptr<ContactDiscretization> at_load_reversal(const double* /*u*/) const { return nullptr; }
 
   /// The same discretization on `candidates`, a leading part of this one's renumbered onto
   /// another system (a condensed near field, condensation.hpp); their `scale` is that system's.
@@ -143,11 +167,16 @@ public:
   /// (0 where they hold).
   virtual std::vector<double> admissibility_violation(const double* u, double alpha) const = 0;
 
+protected:
+  /// With `tangential_rows`, the candidates' free horizontal unknowns are rows too.
+  ContactDiscretization(std::shared_ptr<const PunchShape> punch, double symmetry_factor,
+                        std::vector<ContactCandidate> candidates, bool tangential_rows);
+
 private:
   std::shared_ptr<const PunchShape> punch_;
   double symmetry_factor_ = 2.0;
   std::vector<ContactCandidate> candidates_;
-  std::vector<int> row_equations_;  ///< candidates_[i].equation
+  std::vector<int> row_equations_;  ///< candidates_[i].equation, then the free tangential_equation
 };
 
 }  // namespace indentsim

@@ -13,6 +13,11 @@
 // own rows instead: J w = -dF/d(alpha) with J the elastic stiffness whose contact rows are the
 // discretization's Jacobian rows at the state, and S = -f sum_k (K w)_k over the candidates
 // (the rows without contact force hold (K w)_k = 0).
+//
+// Rows that carry history (Coulomb friction) have no single linearization at a reversal: which
+// nodes stick and which go on sliding as the punch withdraws is itself the solution of the
+// increment.  S is then the one-sided derivative of an increment from the state to alpha - delta
+// on the elastic unloading operator, solved exactly (its equations are piecewise linear).
 #include "indentsim/solvers/assembly.hpp"
 #include "indentsim/solvers/contact_discretization.hpp"
 

@@ -1,0 +1,210 @@
+#include "indentsim/solvers/coulomb_contact.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "indentsim/solvers/contact.hpp"
+
+namespace indentsim {
+
+namespace {
+
+// Slipping is reported where |q| reaches the cone to this relative tolerance (the Newton solve
+// converges the rows to solver.tolerance, far below it).
+constexpr double slip_report_tolerance = 1e-6;
+
+// Per candidate, its tangential row's index in row_equations() (after the candidates' vertical
+// rows, in candidate order), or -1 where the unknown is fixed.
+std::vector<int> tangential_rows(const std::vector<ContactCandidate>& candidates) {
+  std::vector<int> rows(candidates.size(), -1);
+  int next = static_cast<int>(candidates.size());
+  for (std::size_t k = 0; k < candidates.size(); ++k)
+    if (candidates[k].tangential_equation >= 0) rows[k] = next++;
+  return rows;
+}
+
+}  // namespace
+
+CoulombNodeToRigidContact::CoulombNodeToRigidContact(const Mesh& mesh, std::shared_ptr<const PunchShape> punch,
+                                                     const StiffnessPattern& pattern,
+                                                     const std::vector<double>& stiffness_values, double mu)
+    : CoulombNodeToRigidContact(punch, mesh.kinematics().symmetry_factor(),
+                                contact_candidates(mesh, *punch, pattern, stiffness_values), mu, {}) {}
+
+CoulombNodeToRigidContact::CoulombNodeToRigidContact(std::shared_ptr<const PunchShape> punch, double symmetry_factor,
+                                                     std::vector<ContactCandidate> candidates, double mu,
+                                                     std::vector<double> committed)
+    : ContactDiscretization(std::move(punch), symmetry_factor, std::move(candidates), true),
+      mu_(mu),
+      committed_(std::move(committed)),
+      tangential_row_(tangential_rows(this->candidates())) {
+  if (!(mu_ > 0.0)) throw std::invalid_argument("Coulomb friction needs a coefficient > 0 (0 is node-to-rigid contact)");
+  committed_.resize(this->candidates().size(), 0.0);
+}
+
+bool CoulombNodeToRigidContact::sticking() const { return std::isinf(mu_); }
+
+CoulombNodeToRigidContact::Branch CoulombNodeToRigidContact::branch(std::size_t k, const double* u, double alpha,
+                                                                    double normal_force_row,
+                                                                    double tangential_force_row) const {
+  const ContactCandidate& c = candidates()[k];
+  if (!NodeToRigidContact::active(c, normal_force_row, u[c.equation], alpha)) return Branch::open;
+  if (sticking()) return Branch::stick;
+  // z = q - c^t ds, q = r^t (the punch's force along +x balances the internal force); the
+  // cone's radius mu l, l = max(0, -r).
+  const double z = tangential_force_row - c.tangential_scale * (u[c.tangential_equation] - committed_[k]);
+  const double radius = mu_ * std::max(0.0, -normal_force_row);
+  if (std::abs(z) <= radius) return Branch::stick;
+  return z > 0.0 ? Branch::slip_positive : Branch::slip_negative;
+}
+
+std::unique_ptr<ContactDiscretization> CoulombNodeToRigidContact::on_candidates(
+    std::vector<ContactCandidate> candidates) const {
+  std::vector<double> committed(committed_.begin(),
+                                committed_.begin() + static_cast<std::ptrdiff_t>(std::min(candidates.size(), committed_.size())));
+  return std::make_unique<CoulombNodeToRigidContact>(punch_shape(), symmetry_factor(), std::move(candidates), mu_,
+                                                     std::move(committed));
+}
+
+void CoulombNodeToRigidContact::hold_committed_state(const double* u_committed) {
+  const auto& cs = candidates();
+  for (std::size_t k = 0; k < cs.size(); ++k)
+    committed_[k] = cs[k].tangential_equation >= 0 ? u_committed[cs[k].tangential_equation] : 0.0;
+}
+
+std::unique_ptr<ContactDiscretization> CoulombNodeToRigidContact::at_load_reversal(const double* u) const {
+  auto reversed = std::make_unique<CoulombNodeToRigidContact>(punch_shape(), symmetry_factor(), candidates(), mu_,
+                                                              std::vector<double>{});
+  reversed->hold_committed_state(u);
+  return reversed;
+}
+
+void CoulombNodeToRigidContact::write_residual_rows(const double* u, double alpha, const double* row_force,
+                                                    double* f) const {
+  const auto& cs = candidates();
+  // The tangential rows first: they read the normal rows' internal force.
+  for (std::size_t k = 0; k < cs.size(); ++k) {
+    const int row = tangential_row_[k];
+    if (row < 0) continue;
+    const ContactCandidate& c = cs[k];
+    const double r_n = row_force[k], r_t = row_force[row];
+    const double slip = u[c.tangential_equation] - committed_[k];
+    double& value = f[c.tangential_equation];
+    switch (branch(k, u, alpha, r_n, r_t)) {
+      case Branch::open: value = r_t; break;
+      case Branch::stick: value = c.tangential_scale * slip; break;
+      case Branch::slip_positive: value = r_t - mu_ * std::max(0.0, -r_n); break;
+      case Branch::slip_negative: value = r_t + mu_ * std::max(0.0, -r_n); break;
+    }
+  }
+  for (std::size_t k = 0; k < cs.size(); ++k)
+    f[cs[k].equation] = NodeToRigidContact::complementarity(cs[k], row_force[k], u[cs[k].equation], alpha);
+}
+
+std::uint64_t CoulombNodeToRigidContact::write_jacobian_rows(const double* u, double alpha, const double* row_force,
+                                                             const StiffnessPattern& pattern,
+                                                             const std::vector<std::vector<std::int64_t>>& row_positions,
+                                                             double* values) const {
+  std::uint64_t signature = 0xcbf29ce484222325ull;  // FNV-1a over the branches
+  const auto mix = [&signature](unsigned flag) { signature = (signature ^ flag) * 0x100000001b3ull; };
+  const auto& cs = candidates();
+  const auto& start = pattern.column_start();
+  const auto& index = pattern.row_index();
+  // The tangential rows first: a slip row reads the normal row's stiffness before it is replaced.
+  for (std::size_t k = 0; k < cs.size(); ++k) {
+    const int row = tangential_row_[k];
+    if (row < 0) continue;
+    const ContactCandidate& c = cs[k];
+    const double r_n = row_force[k];
+    const Branch b = branch(k, u, alpha, r_n, row_force[row]);
+    mix(static_cast<unsigned>(b) + 1u);
+    const auto& tangential = row_positions[static_cast<std::size_t>(row)];
+    if (b == Branch::open) continue;
+    if (b == Branch::stick) {
+      for (std::int64_t p : tangential) values[p] = 0.0;
+      values[pattern.diagonal_position(c.tangential_equation)] = c.tangential_scale;
+      continue;
+    }
+    if (!(-r_n > 0.0)) continue;  // the cone has no radius: the stiffness row
+    // d(r^t - mu s l) = dr^t + mu s dr.  Both rows of one node couple to the same unknowns (an
+    // element couples all of its nodes' unknowns), so their positions pair up column by column.
+    const auto& normal = row_positions[k];
+    const auto t = static_cast<std::size_t>(c.tangential_equation), n = static_cast<std::size_t>(c.equation);
+    if (normal.size() != tangential.size() ||
+        !std::equal(index.begin() + start[t], index.begin() + start[t + 1], index.begin() + start[n]))
+      throw std::logic_error("a surface node's two unknowns couple to different unknowns: the slip row cannot be formed");
+    const double s = b == Branch::slip_positive ? 1.0 : -1.0;
+    for (std::size_t j = 0; j < tangential.size(); ++j) values[tangential[j]] += mu_ * s * values[normal[j]];
+  }
+  for (std::size_t k = 0; k < cs.size(); ++k) {
+    const auto& c = cs[k];
+    const bool on = NodeToRigidContact::active(c, row_force[k], u[c.equation], alpha);
+    mix(on ? 1u : 2u);
+    if (!on) continue;
+    for (std::int64_t p : row_positions[k]) values[p] = 0.0;
+    values[pattern.diagonal_position(c.equation)] = c.scale;
+  }
+  return signature;
+}
+
+void CoulombNodeToRigidContact::write_parameter_derivative_rows(const double* u, double alpha, const double* row_force,
+                                                                const double* d_row_force, double d_log_stiffness,
+                                                                double* df) const {
+  const auto& cs = candidates();
+  for (std::size_t k = 0; k < cs.size(); ++k) {
+    const int row = tangential_row_[k];
+    if (row < 0) continue;
+    const ContactCandidate& c = cs[k];
+    const double r_n = row_force[k], dr_n = d_row_force[k], dr_t = d_row_force[row];
+    const double slip = u[c.tangential_equation] - committed_[k];
+    double& value = df[c.tangential_equation];
+    const double dl = -r_n > 0.0 ? -dr_n : 0.0;
+    switch (branch(k, u, alpha, r_n, row_force[row])) {
+      case Branch::open: value = dr_t; break;
+      case Branch::stick: value = c.tangential_scale * d_log_stiffness * slip; break;
+      case Branch::slip_positive: value = dr_t - mu_ * dl; break;
+      case Branch::slip_negative: value = dr_t + mu_ * dl; break;
+    }
+  }
+  for (std::size_t k = 0; k < cs.size(); ++k)
+    df[cs[k].equation] =
+        NodeToRigidContact::active(cs[k], row_force[k], u[cs[k].equation], alpha) ? 0.0 : d_row_force[k];
+}
+
+void CoulombNodeToRigidContact::write_depth_derivative_rows(const double* u, double alpha, const double* row_force,
+                                                            double* df) const {
+  const auto& cs = candidates();
+  for (std::size_t k = 0; k < cs.size(); ++k) {
+    if (cs[k].tangential_equation >= 0) df[cs[k].tangential_equation] = 0.0;
+    df[cs[k].equation] = NodeToRigidContact::active(cs[k], row_force[k], u[cs[k].equation], alpha) ? cs[k].scale : 0.0;
+  }
+}
+
+ContactResult CoulombNodeToRigidContact::evaluate(const double* u, const double* internal_force, double alpha) const {
+  ContactResult r = NodeToRigidContact(punch_shape(), symmetry_factor(), candidates()).evaluate(u, internal_force, alpha);
+  const auto& cs = candidates();
+  for (std::size_t k = 0; k < cs.size(); ++k) {
+    if (!r.in_contact[k] || cs[k].tangential_equation < 0) continue;
+    const double q = internal_force[cs[k].tangential_equation];
+    r.tangential_force[k] = q;
+    r.sliding[k] = !sticking() && std::abs(q) >= (1.0 - slip_report_tolerance) * mu_ * r.nodal_force[k];
+  }
+  return r;
+}
+
+double CoulombNodeToRigidContact::half_width(const double* u, double alpha, const ContactResult& contact) const {
+  return NodeToRigidContact(punch_shape(), symmetry_factor(), candidates()).half_width(u, alpha, contact);
+}
+
+bool CoulombNodeToRigidContact::touches(const double* u, double alpha) const {
+  for (const ContactCandidate& c : candidates())
+    if (penetration(c, u[c.equation], alpha) >= 0.0) return true;
+  return false;
+}
+
+std::vector<double> CoulombNodeToRigidContact::admissibility_violation(const double* u, double alpha) const {
+  return NodeToRigidContact(punch_shape(), symmetry_factor(), candidates()).admissibility_violation(u, alpha);
+}
+
+}  // namespace indentsim
