@@ -242,6 +242,7 @@ ForwardModel::ForwardModel(FitData data, std::vector<MaterialParameter> paramete
   // Forward sensitivities where the state is a function of depth and theta alone.
   if (finite_differences_only) fd_reason_ = "finite differences asked for";
   else if (user.material.model == MaterialModel::j2) fd_reason_ = "J2 flow theory carries its history";
+  else if (user.contact.friction > 0.0) fd_reason_ = "friction carries its slip history";
   else if (std::count(parameters_.begin(), parameters_.end(), MaterialParameter::nu))
     fd_reason_ = "nu also shapes the condensed far field";
   sensitivities_ = fd_reason_.empty();

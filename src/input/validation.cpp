@@ -116,6 +116,18 @@ void validate(const LoadCase& lc) {
   // coefficient's slip rows are unsymmetric, which CHOLMOD's Cholesky cannot factor.
   if (lc.contact.friction > 0.0 && lc.contact.discretization != ContactDiscretizationChoice::node_to_rigid)
     fail("contact.friction", "Coulomb friction is implemented with contact.discretization = \"node_to_rigid\" only");
+  // A sticking node keeps its tangential force until it separates, where that force would have to
+  // vanish at once: the increment that releases it has no solution (measured: the shipped steel
+  // sphere's first unloading increment cycles between contact sets through 10 cutbacks).  A finite
+  // coefficient releases it by sliding as the normal force vanishes.
+  if (std::isinf(lc.contact.friction))
+    for (std::size_t i = 1; i < lc.load.path.size(); ++i)
+      if (lc.load.path[i] < lc.load.path[i - 1])
+        fail("contact.friction",
+             fmt::format("\"sticking\" cannot release a node's tangential force as it separates, so the load path's "
+                         "unloading (waypoint {}) has no solution: give a finite coefficient (mu = 10 slides only "
+                         "where the normal force nearly vanishes)",
+                         i));
   if (lc.contact.friction > 0.0 && std::isfinite(lc.contact.friction) && lc.solver.linear == LinearSolverChoice::cholmod)
     fail("solver.linear", fmt::format("\"cholmod\" cannot factor the unsymmetric rows of sliding friction "
                                       "(contact.friction = {}): use \"klu\" or \"auto\"",

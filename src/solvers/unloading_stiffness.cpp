@@ -11,6 +11,22 @@ namespace indentsim {
 
 namespace {
 
+// A matrix in the pattern's CSC layout as an Eigen sparse matrix.
+Eigen::SparseMatrix<double> sparse_matrix(const StiffnessPattern& pattern, const std::vector<double>& values) {
+  const auto n = static_cast<Eigen::Index>(pattern.size());
+  std::vector<Eigen::Triplet<double>> entries;
+  entries.reserve(values.size());
+  const auto& start = pattern.column_start();
+  const auto& row = pattern.row_index();
+  for (Eigen::Index j = 0; j < n; ++j)
+    for (std::int64_t p = start[static_cast<std::size_t>(j)]; p < start[static_cast<std::size_t>(j) + 1]; ++p)
+      entries.emplace_back(static_cast<Eigen::Index>(row[static_cast<std::size_t>(p)]), j,
+                           values[static_cast<std::size_t>(p)]);
+  Eigen::SparseMatrix<double> matrix(n, n);
+  matrix.setFromTriplets(entries.begin(), entries.end());
+  return matrix;
+}
+
 // Rows that do not pin unknowns: the elastic stiffness with the contact's own Jacobian rows,
 // J w = -dF/d(alpha), and dP/d(alpha) = -f sum_k (K w)_k over the candidates.
 double linearized_unloading_stiffness(const ElasticStiffness& stiffness, const ContactDiscretization& contact,
@@ -29,16 +45,7 @@ double linearized_unloading_stiffness(const ElasticStiffness& stiffness, const C
   std::vector<double> d_alpha(static_cast<std::size_t>(n), 0.0);
   contact.write_depth_derivative_rows(u, alpha, row_force.data(), d_alpha.data());
 
-  std::vector<Eigen::Triplet<double>> entries;
-  entries.reserve(jacobian.size());
-  const auto& start = pattern.column_start();
-  const auto& row = pattern.row_index();
-  for (Eigen::Index j = 0; j < n; ++j)
-    for (std::int64_t p = start[static_cast<std::size_t>(j)]; p < start[static_cast<std::size_t>(j) + 1]; ++p)
-      entries.emplace_back(static_cast<Eigen::Index>(row[static_cast<std::size_t>(p)]), j,
-                           jacobian[static_cast<std::size_t>(p)]);
-  Eigen::SparseMatrix<double> J(n, n);
-  J.setFromTriplets(entries.begin(), entries.end());
+  const Eigen::SparseMatrix<double> J = sparse_matrix(pattern, jacobian);
   Eigen::VectorXd rhs(n);
   for (Eigen::Index i = 0; i < n; ++i) rhs[i] = -d_alpha[static_cast<std::size_t>(i)];
   Eigen::VectorXd w;
@@ -93,16 +100,7 @@ double incremental_unloading_stiffness(const ElasticStiffness& stiffness, const 
     if (step == max_steps)
       throw std::runtime_error("the unloading stiffness's increment found no consistent contact branches");
     contact.write_residual_rows(x.data(), target, row_force.data(), f.data());
-    std::vector<Eigen::Triplet<double>> entries;
-    entries.reserve(jacobian.size());
-    const auto& start = pattern.column_start();
-    const auto& row = pattern.row_index();
-    for (std::size_t j = 0; j < n; ++j)
-      for (std::int64_t p = start[j]; p < start[j + 1]; ++p)
-        entries.emplace_back(static_cast<Eigen::Index>(row[static_cast<std::size_t>(p)]), static_cast<Eigen::Index>(j),
-                             jacobian[static_cast<std::size_t>(p)]);
-    Eigen::SparseMatrix<double> J(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
-    J.setFromTriplets(entries.begin(), entries.end());
+    const Eigen::SparseMatrix<double> J = sparse_matrix(pattern, jacobian);
     Eigen::SparseLU<Eigen::SparseMatrix<double>> factor(J);
     if (factor.info() != Eigen::Success) throw std::runtime_error("the elastic unloading stiffness could not be factored");
     const Eigen::VectorXd dw = factor.solve(-Eigen::Map<const Eigen::VectorXd>(f.data(), static_cast<Eigen::Index>(n)));
