@@ -59,12 +59,12 @@ TEST(CoulombFriction, TheJacobianRowsAreTheResidualsDerivative) {
     std::uniform_real_distribution<double> unit(-1.0, 1.0);
     std::vector<double> u(n, 0.0), committed(n, 0.0);
     for (std::size_t i = 0; i < cs.size(); ++i) {
-      // Past the punch (by up to 5% of the depth) over the first nodes, open further out.
-      u[cs[i].equation] = cs[i].surface_height - alpha + (i < 8 ? 0.05 * unit(random) - 0.06 : 0.2 * double(i - 6)) * alpha;
+      // Past the punch (by up to 4% of the depth) over the first nodes, open further out.
+      u[cs[i].equation] = cs[i].surface_height - alpha - (i < 8 ? 0.02 * (1.0 + unit(random)) : -0.2 * double(i - 6)) * alpha;
       if (cs[i].tangential_equation < 0) continue;
       u[cs[i].tangential_equation] = 0.02 * alpha * unit(random);
       // Every third node starts where it is (a small slip, stick); the others far from it (slip).
-      committed[cs[i].tangential_equation] = u[cs[i].tangential_equation] - (i % 3 == 0 ? 1e-6 : 0.05) * alpha * unit(random);
+      committed[cs[i].tangential_equation] = u[cs[i].tangential_equation] - (i % 3 == 0 ? 1e-6 : 0.5) * alpha * unit(random);
     }
     contact.hold_committed_state(committed.data());
     std::vector<double> values(static_cast<std::size_t>(pattern.nonzeros())), f(n), f_plus(n), f_minus(n), jd(n), bulk(n);
@@ -99,6 +99,61 @@ TEST(CoulombFriction, TheJacobianRowsAreTheResidualsDerivative) {
             << "candidate at x = " << c.x << (equation == c.equation ? ", vertical row" : ", horizontal row");
       }
   }
+}
+
+// F^t is continuous across stick, slip and the normal switch (Alart and Curnier's augmented normal
+// force vanishes where node-to-rigid's normal row opens): along a line through states on every
+// branch, the largest change of a row between neighbouring samples halves with the spacing, as
+// it does for a continuous function and does not for a jump.
+TEST(CoulombFriction, TheTangentialRowsAreContinuousAcrossEveryBranch) {
+  const LoadCase lc = shipped_case("axisymmetric/elastic_sphere.toml", {"mesh.contact_nodes=8"});
+  const Mesh mesh = Mesh::from_plan(lc, plan_mesh(lc));
+  const StiffnessPattern pattern(mesh);
+  ElasticStiffness k(mesh, ElasticMaterial{lc.material.E, lc.material.nu}, pattern);
+  CoulombNodeToRigidContact contact(mesh, make_punch(lc.punch), pattern, k.values(), 0.3);
+  ContactEquations equations(pattern, k, k, contact);
+  const auto& cs = contact.candidates();
+  const double alpha = 0.5 * lc.max_depth();
+  const auto n = static_cast<std::size_t>(mesh.equations());
+  std::mt19937 random(3);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  std::vector<double> u(n, 0.0), direction(n, 0.0), committed(n, 0.0);
+  for (std::size_t i = 0; i < cs.size(); ++i) {
+    u[cs[i].equation] = cs[i].surface_height - alpha;
+    direction[cs[i].equation] = 0.3 * alpha * unit(random);
+    if (cs[i].tangential_equation < 0) continue;
+    direction[cs[i].tangential_equation] = 0.6 * alpha * unit(random);
+  }
+  contact.hold_committed_state(committed.data());
+  std::vector<double> f(n), x(n);
+  // Largest change of each tangential row between neighbouring samples of u + t d, t in [-1, 1].
+  const auto largest_steps = [&](int samples, std::vector<std::uint64_t>& signatures) {
+    std::vector<double> largest(cs.size(), 0.0), last(cs.size(), 0.0);
+    std::vector<double> values(static_cast<std::size_t>(pattern.nonzeros()));
+    for (int i = 0; i <= samples; ++i) {
+      const double t = -1.0 + 2.0 * i / samples;
+      for (std::size_t j = 0; j < n; ++j) x[j] = u[j] + t * direction[j];
+      equations.residual(x.data(), alpha, f.data());
+      equations.jacobian(x.data(), alpha, values.data());
+      signatures.push_back(equations.active_set_signature());
+      for (std::size_t c = 0; c < cs.size(); ++c) {
+        if (cs[c].tangential_equation < 0) continue;
+        const double value = f[cs[c].tangential_equation];
+        if (i > 0) largest[c] = std::max(largest[c], std::abs(value - last[c]));
+        last[c] = value;
+      }
+    }
+    return largest;
+  };
+  std::vector<std::uint64_t> coarse_signatures, fine_signatures;
+  const std::vector<double> coarse = largest_steps(1000, coarse_signatures), fine = largest_steps(2000, fine_signatures);
+  std::sort(fine_signatures.begin(), fine_signatures.end());
+  const auto branch_sets = std::unique(fine_signatures.begin(), fine_signatures.end()) - fine_signatures.begin();
+  EXPECT_GE(branch_sets, 5) << "the line crosses too few branches to show anything";
+  for (std::size_t c = 0; c < cs.size(); ++c)
+    if (cs[c].tangential_equation >= 0 && coarse[c] > 0.0) {
+      EXPECT_LT(fine[c] / coarse[c], 0.6) << "candidate at x = " << cs[c].x;
+    }
 }
 
 // Mossakovskii (1954; Spence 1968) for a rigid flat punch bonded to an elastic half-space: at the

@@ -165,8 +165,9 @@ std::string vtu_document(const FieldFrame& frame, const Mesh& mesh, const double
   const auto displacement = [&](std::size_t n, int c) {
     return c < 2 ? nodal_displacement(mesh, u, static_cast<int>(n))[static_cast<std::size_t>(c)] : 0.0;
   };
-  // Contact status per node: 1 in contact, 0 open candidate, -1 cannot touch the punch.
-  std::vector<int> status(nodes, -1);
+  // Contact status per node: 1 in contact, 0 open candidate, -1 cannot touch the punch; sliding: 1
+  // where friction slides (|q| = mu lambda).
+  std::vector<int> status(nodes, -1), sliding(nodes, 0);
   std::vector<double> pressure(nodes, 0.0), shear(nodes, 0.0);
   for (std::size_t k = 0; k < contact.candidates().size(); ++k) {
     const auto& c = contact.candidates()[k];
@@ -174,6 +175,7 @@ std::string vtu_document(const FieldFrame& frame, const Mesh& mesh, const double
     pressure[c.node] = c.tributary_measure > 0 ? contact_state.nodal_force[k] / c.tributary_measure : 0.0;
     // Friction's tangential force over the node's surface, along +x (docs/MODEL.md §3.3).
     shear[c.node] = c.tributary_measure > 0 ? contact_state.tangential_force[k] / c.tributary_measure : 0.0;
+    sliding[c.node] = contact_state.sliding[k];
   }
   // Cell data: Gauss-point averages, the largest e_u, and the plastic flag.
   std::vector<std::array<double, 7>> cell(cells);
@@ -210,6 +212,7 @@ std::string vtu_document(const FieldFrame& frame, const Mesh& mesh, const double
   data_array<std::int32_t>(out, "contact_status", 1, nodes, [&](std::size_t n, int) { return status[n]; });
   data_array<double>(out, "contact_pressure", 1, nodes, [&](std::size_t n, int) { return pressure[n]; });
   data_array<double>(out, "contact_shear_traction", 1, nodes, [&](std::size_t n, int) { return shear[n]; });
+  data_array<std::int32_t>(out, "contact_sliding", 1, nodes, [&](std::size_t n, int) { return sliding[n]; });
   out += "      </PointData>\n      <CellData>\n";
   const std::string cell_names[6] = {"sigma11", "sigma22", "sigma12", third, "strain_intensity", "omega"};
   for (int c = 0; c < 6; ++c)

@@ -24,6 +24,14 @@ std::vector<int> tangential_rows(const std::vector<ContactCandidate>& candidates
   return rows;
 }
 
+// Alart and Curnier's augmented normal force max(0, c_k (v_k + alpha - g_k) - r_k): the punch's
+// force -r_k at every solution (where a contact node's penetration vanishes), and 0 exactly where
+// node-to-rigid's normal row opens (c_k pen_k = r_k), so the cone's radius, and with it F^t, is
+// continuous across the normal switch as well.
+double augmented_normal_force(const ContactCandidate& c, double normal_force_row, double v, double alpha) {
+  return std::max(0.0, c.scale * penetration(c, v, alpha) - normal_force_row);
+}
+
 }  // namespace
 
 CoulombNodeToRigidContact::CoulombNodeToRigidContact(const Mesh& mesh, std::shared_ptr<const PunchShape> punch,
@@ -49,12 +57,13 @@ CoulombNodeToRigidContact::Branch CoulombNodeToRigidContact::branch(std::size_t 
                                                                     double normal_force_row,
                                                                     double tangential_force_row) const {
   const ContactCandidate& c = candidates()[k];
-  if (!NodeToRigidContact::active(c, normal_force_row, u[c.equation], alpha)) return Branch::open;
+  const double l = augmented_normal_force(c, normal_force_row, u[c.equation], alpha);
+  if (!(l > 0.0)) return Branch::open;
   if (sticking()) return Branch::stick;
   // z = q - c^t ds, q = r^t (the punch's force along +x balances the internal force); the
-  // cone's radius mu l, l = max(0, -r).
+  // cone's radius mu l.
   const double z = tangential_force_row - c.tangential_scale * (u[c.tangential_equation] - committed_[k]);
-  const double radius = mu_ * std::max(0.0, -normal_force_row);
+  const double radius = mu_ * l;
   if (std::abs(z) <= radius) return Branch::stick;
   return z > 0.0 ? Branch::slip_positive : Branch::slip_negative;
 }
@@ -90,12 +99,13 @@ void CoulombNodeToRigidContact::write_residual_rows(const double* u, double alph
     const ContactCandidate& c = cs[k];
     const double r_n = row_force[k], r_t = row_force[row];
     const double slip = u[c.tangential_equation] - committed_[k];
+    const double l = augmented_normal_force(c, r_n, u[c.equation], alpha);
     double& value = f[c.tangential_equation];
     switch (branch(k, u, alpha, r_n, r_t)) {
       case Branch::open: value = r_t; break;
       case Branch::stick: value = c.tangential_scale * slip; break;
-      case Branch::slip_positive: value = r_t - mu_ * std::max(0.0, -r_n); break;
-      case Branch::slip_negative: value = r_t + mu_ * std::max(0.0, -r_n); break;
+      case Branch::slip_positive: value = r_t - mu_ * l; break;
+      case Branch::slip_negative: value = r_t + mu_ * l; break;
     }
   }
   for (std::size_t k = 0; k < cs.size(); ++k)
@@ -126,9 +136,9 @@ std::uint64_t CoulombNodeToRigidContact::write_jacobian_rows(const double* u, do
       values[pattern.diagonal_position(c.tangential_equation)] = c.tangential_scale;
       continue;
     }
-    if (!(-r_n > 0.0)) continue;  // the cone has no radius: the stiffness row
-    // d(r^t - mu s l) = dr^t + mu s dr.  Both rows of one node couple to the same unknowns (an
-    // element couples all of its nodes' unknowns), so their positions pair up column by column.
+    // d(r^t - mu s l) = dr^t + mu s (dr - c e_v), l > 0 on a sliding node.  Both rows of one node
+    // couple to the same unknowns (an element couples all of its nodes' unknowns), so their
+    // positions pair up column by column.
     const auto& normal = row_positions[k];
     const auto t = static_cast<std::size_t>(c.tangential_equation), n = static_cast<std::size_t>(c.equation);
     if (normal.size() != tangential.size() ||
@@ -136,6 +146,10 @@ std::uint64_t CoulombNodeToRigidContact::write_jacobian_rows(const double* u, do
       throw std::logic_error("a surface node's two unknowns couple to different unknowns: the slip row cannot be formed");
     const double s = b == Branch::slip_positive ? 1.0 : -1.0;
     for (std::size_t j = 0; j < tangential.size(); ++j) values[tangential[j]] += mu_ * s * values[normal[j]];
+    // The (t, v) entry: the column c.equation among row t's.
+    const auto first = index.begin() + start[t], last = index.begin() + start[t + 1];
+    const auto at = std::lower_bound(first, last, static_cast<std::int64_t>(c.equation));
+    values[tangential[static_cast<std::size_t>(at - first)]] -= mu_ * s * c.scale;
   }
   for (std::size_t k = 0; k < cs.size(); ++k) {
     const auto& c = cs[k];
@@ -159,7 +173,10 @@ void CoulombNodeToRigidContact::write_parameter_derivative_rows(const double* u,
     const double r_n = row_force[k], dr_n = d_row_force[k], dr_t = d_row_force[row];
     const double slip = u[c.tangential_equation] - committed_[k];
     double& value = df[c.tangential_equation];
-    const double dl = -r_n > 0.0 ? -dr_n : 0.0;
+    // l = c pen - r_n where it is positive; c moves with the stiffness.
+    const double dl = augmented_normal_force(c, r_n, u[c.equation], alpha) > 0.0
+                          ? c.scale * d_log_stiffness * penetration(c, u[c.equation], alpha) - dr_n
+                          : 0.0;
     switch (branch(k, u, alpha, r_n, row_force[row])) {
       case Branch::open: value = dr_t; break;
       case Branch::stick: value = c.tangential_scale * d_log_stiffness * slip; break;

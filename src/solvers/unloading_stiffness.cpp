@@ -69,11 +69,12 @@ double linearized_unloading_stiffness(const ElasticStiffness& stiffness, const C
 // alpha - delta on the elastic unloading operator, r(u + w) = r(u) + K w.  Its equations are
 // piecewise linear in w, so semi-smooth Newton reaches their exact solution in a few steps: it
 // stops when the branches at the new w are those the step was solved with.  On a fixed set of
-// branches w is proportional to delta, so S = f sum_k (K w)_k / delta over the contact nodes,
-// without a difference of forces; delta only has to be small enough that no branch of the state
-// itself changes (a contact node with less than 1e-6 of its force to lose).
+// branches w is proportional to delta, so S = f sum_k (K w)_k / delta, without a difference of
+// forces.  The sum runs over the nodes in contact at the state or after the increment: a contact
+// node that opens within it loses all its force, lambda_k = (K w)_k on its free row.
 double incremental_unloading_stiffness(const ElasticStiffness& stiffness, const ContactDiscretization& at_state,
-                                       const double* u, const double* internal_force, double alpha) {
+                                       const double* u, const double* internal_force, double alpha,
+                                       const ContactResult& state) {
   if (!(alpha > 0.0)) return 0.0;
   const std::unique_ptr<ContactDiscretization> reversed = at_state.at_load_reversal(u);
   const ContactDiscretization& contact = reversed ? *reversed : at_state;
@@ -109,10 +110,11 @@ double incremental_unloading_stiffness(const ElasticStiffness& stiffness, const 
     if (next == branches) break;  // w solves the equations of its own branches
     branches = next;
   }
-  const ContactResult state = contact.evaluate(x.data(), f.data(), target);
+  const ContactResult after = contact.evaluate(x.data(), f.data(), target);
   double rate = 0.0;
   for (std::size_t k = 0; k < contact.candidates().size(); ++k)
-    if (state.in_contact[k]) rate += kw[static_cast<std::size_t>(contact.candidates()[k].equation)];
+    if (after.in_contact[k] || (k < state.in_contact.size() && state.in_contact[k]))
+      rate += kw[static_cast<std::size_t>(contact.candidates()[k].equation)];
   return contact.symmetry_factor() * rate / delta;
 }
 
@@ -121,7 +123,8 @@ double incremental_unloading_stiffness(const ElasticStiffness& stiffness, const 
 double elastic_unloading_stiffness(const ElasticStiffness& stiffness, const ContactDiscretization& contact,
                                    const double* u, const double* internal_force, double alpha,
                                    const ContactResult& state) {
-  if (contact.carries_history()) return incremental_unloading_stiffness(stiffness, contact, u, internal_force, alpha);
+  if (contact.carries_history())
+    return incremental_unloading_stiffness(stiffness, contact, u, internal_force, alpha, state);
   if (!contact.rows_pin_unknowns())
     return linearized_unloading_stiffness(stiffness, contact, u, internal_force, alpha);
   const StiffnessPattern& pattern = stiffness.pattern();

@@ -5,11 +5,12 @@
 // the mesh leaves it free, gets Alart and Curnier's semi-smooth equation
 //   F^t_k = q_k - proj_[-mu l_k, mu l_k](q_k - c^t_k ds_k),
 // q_k = r^t_k the tangential force the punch exerts along +x (it balances the node's horizontal
-// internal force), l_k = max(0, -r_k) on a node whose normal row is active (0 on an open one),
-// ds_k = u_k - u^n_k the slip over the increment from the committed state u^n, c^t_k = K_tt.  Its
-// branches: stick, row c^t e_k; slip with s = sign(q - c^t ds), row (dr^t + mu s dr) -- the
-// tangential stiffness row plus mu s times the normal one, unsymmetric; open, the stiffness row.
-// F^t is continuous across them.  mu = infinity ("sticking"): a node in contact keeps its
+// internal force), l_k = max(0, c_k pen_k - r_k) Alart and Curnier's augmented normal force (-r_k
+// at a solution, 0 where the normal row opens), ds_k = u_k - u^n_k the slip over the increment
+// from the committed state u^n, c^t_k = K_tt.  Its branches: stick, row c^t e_k; slip with
+// s = sign(q - c^t ds), row dr^t + mu s (dr - c_k e_v) -- the tangential stiffness row plus
+// mu s times the normal one, unsymmetric; open (l = 0), the stiffness row.  F^t is continuous
+// across all three.  mu = infinity ("sticking"): a node in contact keeps its
 // committed horizontal displacement, row c^t e_k (pinned, symmetric once eliminated: CHOLMOD may
 // take it).
 #include <memory>
