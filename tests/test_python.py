@@ -159,8 +159,7 @@ class Run(Temporary):
         self.assertGreater(c["unknowns"], 0)
         self.assertFalse(os.path.exists(self.path("never")))
 
-    @unittest.skipIf((os.cpu_count() or 1) < 2, "needs 2 cores")
-    def test_the_gil_is_released_two_runs_in_two_threads_take_the_time_of_one(self):
+    def test_the_gil_is_released_while_a_run_solves_and_two_threads_run_alike(self):
         case = os.path.join(SOURCE, "loadcases", "power_law.toml")
         # Without the error estimate: its companion runs on the second core beside the run, and
         # "one run" would no longer be one core's work.
@@ -168,10 +167,22 @@ class Run(Temporary):
         start = time.monotonic()
         alone = indentsim.run(case, overrides=single)
         one = time.monotonic() - start
+        # While a run solves in another thread, this one runs Python: held for the whole run, the
+        # GIL would let it through only before and after.  (A behaviour, not a timing: the count
+        # does not depend on how loaded the machine is, only on whether the thread gets the GIL.)
         results = [None, None]
 
         def solve(k):
             results[k] = indentsim.run(case, overrides=single)
+        background = threading.Thread(target=solve, args=(0,))
+        turns = 0
+        background.start()
+        while background.is_alive():
+            turns += 1
+            time.sleep(0.002)
+        background.join()
+        self.assertGreaterEqual(turns, 20, f"the main thread ran {turns} times during a {one:.2f} s run")
+        # Two runs in two threads give the run's own curve (no shared state), and overlap in time.
         threads = [threading.Thread(target=solve, args=(k,)) for k in range(2)]
         start = time.monotonic()
         for t in threads:
@@ -179,8 +190,8 @@ class Run(Temporary):
         for t in threads:
             t.join()
         two = time.monotonic() - start
-        print(f"\none run {one:.2f} s; two runs in two threads {two:.2f} s (ratio {two / one:.2f})")
-        self.assertLess(two / one, 1.5)  # 2.0 if the GIL were held
+        print(f"\none run {one:.2f} s; two runs in two threads {two:.2f} s (ratio {two / one:.2f}); "
+              f"the main thread ran {turns} times during one run")
         for r in results:
             np.testing.assert_array_equal(r.curve["P"], alone.curve["P"])
 
