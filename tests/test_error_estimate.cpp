@@ -232,3 +232,74 @@ TEST(ErrorEstimate, TargetErrorIsMetAndTrue) {
   EXPECT_LE(truth, 2e-3);
   EXPECT_GT(truth, 2e-4);  // and not bought with a mesh far finer than asked
 }
+
+// The path's share of a history-dependent run's error (error_estimate.hpp, IncrementSensitivity):
+// on the plane-strain J2 cylinder, whose path integration is first order (docs/DESIGN.md §16),
+// the change that halving the increments makes is the true increment error of the companion's
+// mesh within a factor 2 -- the truth from the same mesh with 8 times the increments,
+// extrapolated at first order -- and halves as the increments double.
+TEST(ErrorEstimate, HalvingTheIncrementsMeasuresAJ2PathsErrorOnTheCompanionsMesh) {
+  LoadCase lc = shipped_case("load_unload.toml", {"load.path=[0, 6e-5]", "load.increments=20"});
+  double change[2] = {0.0, 0.0};
+  for (int k = 0; k < 2; ++k) {
+    lc.load.increments = k == 0 ? 20 : 40;
+    Simulation sim(lc);
+    const DiscretizationErrorEstimate e(sim);
+    ASSERT_TRUE(e.increment_sensitivity());
+    const IncrementSensitivity& s = *e.increment_sensitivity();
+    change[k] = s.relative_change();
+    if (k == 1) continue;
+    // The truth on the companion's mesh: its P at 8 and 16 times fewer steps' spacing.
+    LoadCase coarse = lc;
+    coarse.mesh.contact_nodes = s.contact_nodes;
+    coarse.mesh.contact_half_width = sim.plan().contact_half_width_estimate;
+    coarse.mesh.error_estimate = ErrorEstimateChoice::off;
+    double fine[2];
+    for (int f = 0; f < 2; ++f) {
+      coarse.load.increments = lc.load.increments * (f == 0 ? 4 : 8);
+      Simulation run(coarse, sim.plan().contact_half_width_estimate);
+      run.run();
+      fine[f] = run.contact().force;
+    }
+    const double limit = fine[1] + (fine[1] - fine[0]);  // first order: P* = P_h + (P_h - P_2h)
+    const double truth = std::abs(s.force - limit) / std::abs(limit);
+    std::printf("halving 20 increments: %.4f%%; the true increment error on that mesh %.4f%%\n", 100 * change[0],
+                100 * truth);
+    EXPECT_GT(change[0], truth / 2.0);
+    EXPECT_LT(change[0], truth * 2.0);
+  }
+  std::printf("halving 40 increments: %.4f%%, %.2f of the change at 20\n", 100 * change[1], change[1] / change[0]);
+  EXPECT_GT(change[1] / change[0], 0.3);
+  EXPECT_LT(change[1] / change[0], 0.8);
+}
+
+// Runs whose result is a function of the depth alone (elastic, Ilyushin) have no such companion;
+// friction and J2 do.
+TEST(ErrorEstimate, OnlyRunsThatDependOnTheirIncrementsHalveThem) {
+  const LoadCase elastic = shipped_case("axisymmetric/elastic_sphere.toml", {"mesh.contact_nodes=8"});
+  const LoadCase ilyushin = shipped_case("deep_plastic.toml", {"mesh.contact_nodes=8", "load.increments=6"});
+  LoadCase frictional = elastic;
+  frictional.contact.friction = 0.2;
+  for (const auto& [lc, expected] : {std::pair{elastic, false}, {ilyushin, false}, {frictional, true}}) {
+    EXPECT_EQ(depends_on_the_increments(lc), expected);
+    Simulation sim(lc);
+    EXPECT_EQ(DiscretizationErrorEstimate(sim).increment_sensitivity().has_value(), expected);
+  }
+  LoadCase segments = shipped_case("axisymmetric/steel_sphere.toml");
+  const LoadCase halved = with_halved_increments(segments);
+  EXPECT_EQ(halved.load.segment_increments, (std::vector<int>{10, 6, 1}));
+  EXPECT_EQ(halved.load.increments, 17);
+}
+
+// A path too coarse for its history is warned about, naming the key to raise.
+TEST(ErrorEstimate, ACoarsePathIsWarnedAboutNamingLoadIncrements) {
+  const LoadCase lc = shipped_case("load_unload.toml", {"load.path=[0, 6e-5]", "load.increments=4"});
+  Simulation sim(lc);
+  const DiscretizationErrorEstimate e(sim);
+  ASSERT_TRUE(e.increment_sensitivity());
+  EXPECT_GT(e.increment_sensitivity()->relative_change(), increment_change_warning);
+  const auto& w = e.warnings();
+  EXPECT_TRUE(std::any_of(w.begin(), w.end(), [](const std::string& s) {
+    return s.find("halving the increments") != std::string::npos && s.find("load.increments") != std::string::npos;
+  }));
+}

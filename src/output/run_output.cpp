@@ -324,6 +324,22 @@ void RunOutput::finish(const IncrementSnapshot& final_state, RunStatus status, c
   write_file_atomically(dir_ / "summary.json", summary_.json(run_fields_, status, message, times, error_fields(times)));
 }
 
+namespace {
+
+// summary.json's error_estimate.increments: what halving the increments does to P at the deepest
+// point (null for a run that does not depend on its increments, error_estimate.hpp).
+nlohmann::ordered_json increment_fields(const DiscretizationErrorEstimate& e) {
+  const auto& s = e.increment_sensitivity();
+  if (!s) return nullptr;
+  return {{"contact_nodes", s->contact_nodes},
+          {"alpha", s->alpha},
+          {"P", s->force},
+          {"P_half_the_increments", s->force_halved},
+          {"P_relative_change", significant(s->relative_change(), 7)}};
+}
+
+}  // namespace
+
 nlohmann::ordered_json RunOutput::error_fields(const PhaseTimes& times) const {
   nlohmann::ordered_json out = nlohmann::ordered_json::object();
   std::optional<DiscretizationErrorEstimate::AtIncrement> final_estimate;
@@ -367,6 +383,7 @@ nlohmann::ordered_json RunOutput::error_fields(const PhaseTimes& times) const {
                              {"a_order", DiscretizationErrorEstimate::nominal_width_order},
                              {"final", at_row(records_.back())},
                              {"peak", at_row(*peak)},
+                             {"increments", increment_fields(e)},
                              {"time_s", seconds(estimate_seconds)},
                              {"cost_fraction", fraction(estimate_seconds)},
                              {"wall_added_s", seconds(wait_seconds)},

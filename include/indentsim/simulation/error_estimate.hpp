@@ -16,6 +16,7 @@
 // mesh.error_estimate = "observed" a second companion at a quarter of the contact nodes gives
 // the order of P at each increment from the three meshes instead (where the three values are in
 // the asymptotic range: monotone, with an order in [0.5, 6]; the nominal order otherwise).
+#include <cmath>
 #include <optional>
 #include <string>
 #include <vector>
@@ -45,6 +46,28 @@ struct CompanionRun {
   std::string failure;  ///< why it stopped before the end of the load path ("" when it did not)
   double wall_seconds = 0.0;
 };
+
+/// True when a run's result depends on the path between its increments, not on the depth alone:
+/// J2 flow theory and friction carry a history; elasticity and Ilyushin's deformation theory do not.
+bool depends_on_the_increments(const LoadCase& load_case);
+
+/// The same case with half the increments in each segment of its load path (at least one).
+LoadCase with_halved_increments(const LoadCase& load_case);
+
+/// What halving the increments does to P at the deepest point of the path, on the first
+/// companion's mesh: the path integration's error of a history-dependent run, which the mesh
+/// companions do not see (docs/DESIGN.md §16).  Where the integration is in its first-order range
+/// the change is about the error of the run's own increments; where it is not (a J2 sphere or cone
+/// needs several increments for each node entering contact) the error is larger than the change.
+struct IncrementSensitivity {
+  int contact_nodes = 0;                  ///< of the mesh it was measured on (the first companion's)
+  double alpha = 0.0;                     ///< the deepest depth of the path [m]
+  double force = 0.0;                     ///< P there with the run's increments [N/m or N]
+  double force_halved = 0.0;              ///< with half of them
+  double relative_change() const { return force != 0.0 ? std::abs(force - force_halved) / std::abs(force) : 0.0; }
+};
+/// A relative change beyond this is warned about, naming load.increments.
+inline constexpr double increment_change_warning = 0.005;
 
 /// Why `load_case` cannot have the error estimate it asks for (its companions would have fewer
 /// than 2 contact nodes), or nullopt.  Such a run goes without one, with this as a warning.
@@ -92,6 +115,10 @@ public:
   double force_order() const { return force_order_; }
   int contact_nodes() const { return contact_nodes_; }  ///< of the main run
   const std::vector<CompanionRun>& companions() const { return companions_; }
+  /// For a run that depends on its increments: P at the deepest point on the first companion's
+  /// mesh with the run's increments and with half of them (nullopt otherwise, or when either
+  /// companion stopped before that point).
+  const std::optional<IncrementSensitivity>& increment_sensitivity() const { return increment_sensitivity_; }
   double wall_seconds() const;
   const std::vector<std::string>& warnings() const { return warnings_; }
 
@@ -102,6 +129,8 @@ private:
   double force_order_ = nominal_force_order;
   int contact_nodes_ = 0;
   std::vector<CompanionRun> companions_;
+  std::optional<IncrementSensitivity> increment_sensitivity_;
+  double halved_wall_seconds_ = 0.0;  ///< the halved-increments companion's
   std::vector<std::string> warnings_;
 };
 
