@@ -33,6 +33,17 @@ LoadCase with_friction(LoadCase lc, double mu) {
   return lc;
 }
 
+// Expects `check` to throw an InputError naming `key` (what was accepted otherwise: `what`).
+template <class Check>
+void expect_refused(Check check, const std::string& key, const char* what) {
+  try {
+    check();
+    ADD_FAILURE() << what << " was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.key(), key);
+  }
+}
+
 double final_force(const LoadCase& lc) {
   Simulation sim(lc);
   sim.run();
@@ -326,12 +337,7 @@ TEST(CoulombFriction, PlasticSpecimensIndentWithFrictionInBothKinematics) {
 TEST(CoulombFriction, StickingRunsOnBothSolversAndSlidingOnlyOnKlu) {
   LoadCase lc = shipped_case("axisymmetric/steel_sphere.toml", {"mesh.contact_nodes=8"});
   lc.contact.friction = sticking;
-  try {
-    validate(lc);
-    ADD_FAILURE() << "sticking friction on an unloading path was accepted";
-  } catch (const InputError& e) {
-    EXPECT_EQ(e.key(), "contact.friction");
-  }
+  expect_refused([&] { validate(lc); }, "contact.friction", "sticking friction on an unloading path");
   lc.load.path = {0.0, 10e-6};
   lc.load.segment_increments.clear();
   lc.load.increments = 20;
@@ -345,20 +351,10 @@ TEST(CoulombFriction, StickingRunsOnBothSolversAndSlidingOnlyOnKlu) {
   ASSERT_EQ(forces[0].size(), forces[1].size());
   for (std::size_t k = 0; k < forces[0].size(); ++k) EXPECT_NEAR(forces[0][k], forces[1][k], 1e-8 * forces[0][k] + 1e-12);
   lc.contact.friction = 0.3;
-  try {
-    validate(lc);
-    ADD_FAILURE() << "CHOLMOD with sliding friction was accepted";
-  } catch (const InputError& e) {
-    EXPECT_EQ(e.key(), "solver.linear");
-  }
+  expect_refused([&] { validate(lc); }, "solver.linear", "CHOLMOD with sliding friction");
   lc.solver.linear = LinearSolverChoice::automatic;
   lc.contact.discretization = ContactDiscretizationChoice::integrated_gap;
-  try {
-    validate(lc);
-    ADD_FAILURE() << "friction with the integrated gap was accepted";
-  } catch (const InputError& e) {
-    EXPECT_EQ(e.key(), "contact.friction");
-  }
+  expect_refused([&] { validate(lc); }, "contact.friction", "friction with the integrated gap");
 }
 
 // The key reads a coefficient or the word "sticking", and writes it back as read.
@@ -373,12 +369,7 @@ TEST(CoulombFriction, TheKeyReadsACoefficientOrSticking) {
   EXPECT_EQ(read("0").contact.friction, 0.0);
   for (const char* bad : {"-0.1", "\"stuck\"", "inf", "nan"}) {
     SCOPED_TRACE(bad);
-    try {
-      read(bad);
-      ADD_FAILURE() << "accepted";
-    } catch (const InputError& e) {
-      EXPECT_EQ(e.key(), "contact.friction");
-    }
+    expect_refused([&] { read(bad); }, "contact.friction", bad);
   }
 }
 

@@ -44,6 +44,7 @@ CoulombNodeToRigidContact::CoulombNodeToRigidContact(std::shared_ptr<const Punch
                                                      std::vector<ContactCandidate> candidates, double mu,
                                                      std::vector<double> committed)
     : ContactDiscretization(std::move(punch), symmetry_factor, std::move(candidates), true),
+      normal_(punch_shape(), symmetry_factor, this->candidates()),
       mu_(mu),
       committed_(std::move(committed)),
       tangential_row_(tangential_rows(this->candidates())) {
@@ -199,7 +200,7 @@ void CoulombNodeToRigidContact::write_depth_derivative_rows(const double* u, dou
 }
 
 ContactResult CoulombNodeToRigidContact::evaluate(const double* u, const double* internal_force, double alpha) const {
-  ContactResult r = NodeToRigidContact(punch_shape(), symmetry_factor(), candidates()).evaluate(u, internal_force, alpha);
+  ContactResult r = normal_.evaluate(u, internal_force, alpha);
   const auto& cs = candidates();
   for (std::size_t k = 0; k < cs.size(); ++k) {
     if (!r.in_contact[k] || cs[k].tangential_equation < 0) continue;
@@ -211,17 +212,13 @@ ContactResult CoulombNodeToRigidContact::evaluate(const double* u, const double*
 }
 
 double CoulombNodeToRigidContact::half_width(const double* u, double alpha, const ContactResult& contact) const {
-  return NodeToRigidContact(punch_shape(), symmetry_factor(), candidates()).half_width(u, alpha, contact);
+  return normal_.half_width(u, alpha, contact);
 }
 
-bool CoulombNodeToRigidContact::touches(const double* u, double alpha) const {
-  for (const ContactCandidate& c : candidates())
-    if (penetration(c, u[c.equation], alpha) >= 0.0) return true;
-  return false;
-}
+bool CoulombNodeToRigidContact::touches(const double* u, double alpha) const { return normal_.touches(u, alpha); }
 
 std::vector<double> CoulombNodeToRigidContact::admissibility_violation(const double* u, double alpha) const {
-  return NodeToRigidContact(punch_shape(), symmetry_factor(), candidates()).admissibility_violation(u, alpha);
+  return normal_.admissibility_violation(u, alpha);
 }
 
 }  // namespace indentsim

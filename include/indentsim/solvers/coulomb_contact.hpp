@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "indentsim/geometry/mesh.hpp"
+#include "indentsim/solvers/contact.hpp"
 #include "indentsim/solvers/contact_discretization.hpp"
 
 namespace indentsim {
@@ -68,6 +69,7 @@ public:
   std::vector<double> admissibility_violation(const double* u, double alpha) const override;
 
 private:
+  NodeToRigidContact normal_;          ///< the normal rows' discretization, on the same candidates
   double mu_;
   std::vector<double> committed_;     ///< u^n_k per candidate (0 where the unknown is fixed)
   std::vector<int> tangential_row_;   ///< per candidate: its index in row_equations(), or -1
