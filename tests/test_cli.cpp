@@ -181,7 +181,7 @@ TEST_F(Cli, TargetErrorChoosesTheMeshAndReportsIt) {
   const fs::path out = dir_ / "target";
   const Outcome o = run("run " + c.string() + " --out " + out.string() + " --set mesh.target_error=2e-3");
   ASSERT_EQ(o.status, 0) << o.err;
-  EXPECT_NE(o.out.find("target error 0.002: the pilot (contact_nodes = 10)"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("target error 0.002: the pilot at contact_nodes = 10, 3 increments estimates"), std::string::npos) << o.out;
   const auto summary = nlohmann::json::parse(slurp(out / "summary.json"));
   const auto& target = summary["target_error"];
   EXPECT_EQ(target["target"], 0.002) << summary;
@@ -193,4 +193,25 @@ TEST_F(Cli, TargetErrorChoosesTheMeshAndReportsIt) {
   EXPECT_GE(as_run.mesh.contact_nodes, 10);
   EXPECT_EQ(target["contact_nodes"], as_run.mesh.contact_nodes);
   EXPECT_TRUE(target["P_relative_error_estimate"].is_number());
+}
+
+// A J2 run depends on its increments: the target chooses them with the mesh, case.toml keeps
+// them (a resume continues on them), and summary.json judges both shares of the error.
+TEST_F(Cli, TargetErrorChoosesTheIncrementsOfAPathDependentRun) {
+  const fs::path c = write_case("case.toml", good_case);
+  const fs::path out = dir_ / "target";
+  const Outcome o = run("run " + c.string() + " --out " + out.string() +
+                        " --set material.model=\\\"j2\\\" --set material.e0=1e-3 --set load.increments=2"
+                        " --set mesh.target_error=5e-3");
+  ASSERT_EQ(o.status, 0) << o.err;
+  const auto summary = nlohmann::json::parse(slurp(out / "summary.json"));
+  const auto& target = summary["target_error"];
+  ASSERT_TRUE(target["before"][0]["P_relative_change_half_the_increments"].is_number()) << target;
+  EXPECT_GT(target["before"][0]["P_relative_change_half_the_increments"].get<double>(), 5e-3);  // 2 are too few
+  const indentsim::LoadCase as_run = indentsim::read_load_case(out / "case.toml");
+  EXPECT_GT(as_run.load.total_increments(), 2);
+  EXPECT_EQ(target["increments"], as_run.load.total_increments());
+  EXPECT_LE(target["P_relative_change_half_the_increments"].get<double>(), 5e-3) << target;
+  EXPECT_LE(target["P_relative_error_estimate"].get<double>(), 5e-3) << target;
+  EXPECT_EQ(target["met"], true) << target;
 }

@@ -224,17 +224,21 @@ RunReport drive(Simulation& sim, RunOutput& output, RunObserver& observer, NewRu
 RunReport run_load_case(LoadCase lc, RunObserver& observer) {
   const auto start = std::chrono::steady_clock::now();
   RunFolder folder(lc.output.dir, lc.source);  // one run per folder: locked before anything is solved
-  // mesh.target_error: a pilot chooses contact_nodes; the run checks its own estimate and is
-  // refined once if it missed.  The case as run (case.toml, checkpoints) has the chosen mesh.
+  // mesh.target_error: pilots choose contact_nodes (and, for a path-dependent run, the
+  // increments); the run checks its own estimates and is refined once if it missed.  The case as
+  // run (case.toml, checkpoints) has the chosen mesh and increments.
   std::optional<TargetErrorChoice> target;
   if (lc.mesh.target_error) {
     target.emplace();
-    lc.mesh.contact_nodes = plan_contact_nodes_for_target(lc, *target);
-    lc.mesh.target_error.reset();
-    observer.note(fmt::format("target error {:.3g}: the pilot (contact_nodes = {}) estimates {:.3g}; running "
-                              "contact_nodes = {}",
-                              target->target, target->attempts.back().contact_nodes,
-                              target->attempts.back().relative_error, lc.mesh.contact_nodes));
+    lc = plan_case_for_target(lc, *target);
+    for (const auto& a : target->attempts)
+      observer.note(fmt::format("target error {:.3g}: the pilot at contact_nodes = {}, {} increments estimates {:.3g}{}",
+                                target->target, a.contact_nodes, a.increments, a.relative_error,
+                                a.increment_change ? fmt::format("; halving its increments moves P {:.3g}",
+                                                                 *a.increment_change)
+                                                   : std::string()));
+    observer.note(fmt::format("target error {:.3g}: running contact_nodes = {}, {} increments", target->target,
+                              lc.mesh.contact_nodes, lc.load.total_increments()));
   }
   for (;;) {
     NewRun run = start_run(lc, observer);  // before anything is written
@@ -249,14 +253,21 @@ RunReport run_load_case(LoadCase lc, RunObserver& observer) {
     if (target) output.set_target_choice(*target);
     RunReport report = drive(sim, output, observer, &run);
     report.wall_seconds = seconds_since(start);
-    if (!target || report.status != RunStatus::finished || target->attempts.size() > 1) return report;
+    if (!target || report.status != RunStatus::finished || target->retried) return report;
     const std::optional<double> reached = relative_force_error(*estimate, output.records());
-    if (!reached || *reached <= target->target) return report;
-    target->attempts.push_back({"run", lc.mesh.contact_nodes, *reached});
-    lc.mesh.contact_nodes = contact_nodes_for_target(*reached, lc.mesh.contact_nodes, target->target,
-                                                     force_order_assumed(lc));
-    observer.note(fmt::format("target error {:.3g} missed (estimate {:.3g}): running once more at contact_nodes = {}",
-                              target->target, *reached, lc.mesh.contact_nodes));
+    std::optional<double> change;
+    if (const auto& s = estimate->increment_sensitivity()) change = s->relative_change();
+    const bool mesh_missed = reached && *reached > target->target;
+    const bool increments_missed = change && *change > target->target;
+    if (!mesh_missed && !increments_missed) return report;
+    target->attempts.push_back({"run", lc.mesh.contact_nodes, lc.load.total_increments(), reached.value_or(0.0), change});
+    target->retried = true;
+    lc = refine_case_for_target(lc, target->attempts.back(), target->target);
+    observer.note(fmt::format("target error {:.3g} missed (estimate {:.3g}{}): running once more at contact_nodes = "
+                              "{}, {} increments",
+                              target->target, reached.value_or(0.0),
+                              change ? fmt::format("; halving the increments moves P {:.3g}", *change) : std::string(),
+                              lc.mesh.contact_nodes, lc.load.total_increments()));
   }
 }
 

@@ -22,11 +22,6 @@ namespace {
 // of 1e-4 (tests/test_sensitivity.cpp): negligible for the optimiser.
 constexpr double finite_difference_step = 1e-5;
 
-int total_increments(const LoadInput& load) {
-  if (load.segment_increments.empty()) return load.increments;
-  return std::accumulate(load.segment_increments.begin(), load.segment_increments.end(), 0);
-}
-
 /// Where x0 falls in x (increasing): y(x0) = (1 - t) y[lower] + t y[lower + 1] (t = 0 at the last
 /// point), or nullopt outside [x.front(), x.back()].
 struct Bracket {
@@ -89,7 +84,7 @@ CurveReduction reduce_to_resolution(FitData& data) {
   if (data.kind != FitDataKind::force_depth_curve || data.abscissa.empty() || data.abscissa.size() != data.values.size())
     return r;
   const LoadCase& lc = data.load_case;
-  const int increments = std::max(1, total_increments(lc.load));
+  const int increments = std::max(1, lc.load.total_increments());
   r.step = lc.max_depth() / increments;
   if (!(r.step > 0.0)) return r;
   const std::vector<double>& a = data.abscissa;
@@ -187,7 +182,7 @@ ForwardModel::ForwardModel(FitData data, std::vector<MaterialParameter> paramete
 
   if (data_.kind == FitDataKind::force_depth_curve) {
     // The load path through the data's depths, each step no longer than the case's own.
-    const double step = user.max_depth() / std::max(1, total_increments(user.load));
+    const double step = user.max_depth() / std::max(1, user.load.total_increments());
     path_ = {0.0};
     for (std::size_t i = 0; i < data_.abscissa.size(); ++i) {
       const double depth = data_.abscissa[i];
@@ -206,7 +201,7 @@ ForwardModel::ForwardModel(FitData data, std::vector<MaterialParameter> paramete
     for (std::size_t s = 1; s < path_.size(); ++s)
       prepared_.load.segment_increments.push_back(
           std::max(1, static_cast<int>(std::ceil(std::abs(path_[s] - path_[s - 1]) / step - 1e-9))));
-    prepared_.load.increments = total_increments(prepared_.load);
+    prepared_.load.increments = prepared_.load.total_increments();
   } else {
     const auto& path = user.load.path;
     if (path.back() != 0.0 || !std::any_of(path.begin(), path.end(), [](double a) { return a > 0.0; }))
@@ -272,8 +267,7 @@ LoadCase ForwardModel::fitted_case(const std::vector<double>& theta) const {
 std::vector<double> ForwardModel::run_once(const LoadCase& base, int refinement,
                                            std::vector<std::vector<double>>* jacobian) const {
   LoadCase lc = base;
-  for (int& n : lc.load.segment_increments) n *= refinement;
-  lc.load.increments *= refinement;
+  lc.load.multiply_increments(refinement);
   Simulation sim(lc);
   const std::size_t points = data_.abscissa.size();
   std::vector<double> values(points, 0.0);

@@ -379,8 +379,9 @@ const std::vector<KeyDeclaration>& key_declarations() {
                             "a quarter measures the order; off"},
                            error_estimate_names, [](auto& c) -> auto& { return c.mesh.error_estimate; }));
     k.push_back(optional_number_key({"mesh", "target_error", "number", "[1e-5, 0.1]", "",
-                                     "relative error of the final P asked for: the run chooses contact_nodes from a "
-                                     "pilot, checks its estimate and refines once if it was missed"},
+                                     "relative error of the final P asked for: pilots choose contact_nodes (and, for a "
+                                     "run that depends on its increments, the increments); the run checks its "
+                                     "estimates and refines once if it missed"},
                                     [](auto& c) -> auto& { return c.mesh.target_error; }));
     {
       KeyDeclaration dir{"output", "dir", "string", "not empty", "",

@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 
 #include <fmt/format.h>
 #include <toml++/toml.h>
@@ -23,6 +24,19 @@ double LoadCase::max_depth() const {
   double deepest = 0.0;
   for (double alpha : load.path) deepest = std::max(deepest, alpha);
   return deepest;
+}
+
+int LoadInput::total_increments() const {
+  if (segment_increments.empty()) return increments;
+  int total = 0;
+  for (int n : segment_increments) total += n;
+  return total;
+}
+
+void LoadInput::multiply_increments(int factor) {
+  if (factor < 1) throw std::invalid_argument("multiply_increments: the factor must be at least 1");
+  for (int& n : segment_increments) n *= factor;
+  increments *= factor;
 }
 
 std::string to_string(MaterialModel model) { return name_of(model_names, model); }

@@ -54,6 +54,12 @@ struct LoadInput {
   /// Optional per-segment counts (`increments = [n1, n2, ...]`, one per segment of the path);
   /// empty when `increments` is a single total spread by segment length.
   std::vector<int> segment_increments;
+
+  /// The increments of the whole path.
+  int total_increments() const;
+  /// Every segment's increments (or the total) multiplied by `factor` >= 1: the same waypoints,
+  /// each increment split into `factor`.
+  void multiply_increments(int factor);
 };
 
 enum class ElementChoice { automatic, q1, bbar };

@@ -182,6 +182,7 @@ private:
   FieldSeries fields_;
   int last_step_ = -1, last_fields_step_ = -1;
   double deepest_depth_ = 0.0;  ///< the load path's deepest waypoint
+  int increments_ = 0;          ///< the path's, as run
   int peak_step_ = -1;          ///< the increment that reached it (its fields and tables are kept)
   std::vector<int> peak_steps_;  ///< the planned increments where an unloading branch starts
   std::pair<std::string, std::string> peak_tables_;

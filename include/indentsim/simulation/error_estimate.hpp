@@ -134,17 +134,22 @@ private:
   std::vector<std::string> warnings_;
 };
 
-/// How mesh.target_error chose a run's mesh: the runs before it (the pilot, and a run whose
-/// estimate missed the target), their contact nodes and the relative error of the final P each
-/// estimated.  The run itself reports its own estimate against the target.
+/// How mesh.target_error chose a run's mesh and increments: the runs before it (the pilots, and a
+/// run whose estimate missed the target), each with its contact nodes, its increments, the
+/// relative error it estimated of the final P and, for a run that depends on its increments,
+/// the relative change of P that halving them made.  The run itself reports its own estimates
+/// against the target.
 struct TargetErrorChoice {
   struct Attempt {
     std::string role;  ///< "pilot" or "run"
     int contact_nodes = 0;
-    double relative_error = 0.0;  ///< estimated |P - P_exact| / |P| at the final increment
+    int increments = 0;
+    double relative_error = 0.0;             ///< estimated |P - P_exact| / |P| at the final increment
+    std::optional<double> increment_change;  ///< IncrementSensitivity::relative_change, where measured
   };
   double target = 0.0;
   std::vector<Attempt> attempts;
+  bool retried = false;  ///< a run missed and was refined once (it is not refined twice)
 };
 
 /// The relative error estimate of a curve's final P (of its peak force when the curve ends at
@@ -152,10 +157,27 @@ struct TargetErrorChoice {
 std::optional<double> relative_force_error(const DiscretizationErrorEstimate& estimate,
                                            const std::vector<IncrementRecord>& curve);
 
-/// The pilot of mesh.target_error: the case on `pilot_contact_nodes` with its companion, in
-/// memory; records it in `choice` (whose target it sets) and returns the contact nodes the
-/// target needs (at least the pilot's).
-int plan_contact_nodes_for_target(const LoadCase& load_case, TargetErrorChoice& choice, int pilot_contact_nodes = 10);
+/// mesh.target_error's plan: pilots of the case, in memory, each with its error estimate, from
+/// `first_pilot_contact_nodes` up.  A pilot whose estimate asks for more than twice its contact
+/// nodes is followed by one at twice them (the prediction from a coarse pilot is where an
+/// estimate is least asymptotic, and a run at N costs about N^3: the pilots cost a seventh of
+/// the run at most), so that the run is the cheapest whose estimate meets the target.  For a
+/// run that depends on its increments the path comes first: a pilot whose change on halving its
+/// increments misses the target is repeated on the same mesh with more of them
+/// (increments_factor_for_target; at most 16 times the case's), and the run takes the last
+/// pilot's increments.  Records the pilots in
+/// `choice` (whose target it sets) and returns the case to run: mesh.contact_nodes and the
+/// increments chosen, mesh.target_error cleared.
+LoadCase plan_case_for_target(const LoadCase& load_case, TargetErrorChoice& choice, int first_pilot_contact_nodes = 10);
+
+/// The case to run after `as_run` missed the target with the estimates of `missed`: finer where
+/// the mesh's estimate missed, more increments where the increments' change did.
+LoadCase refine_case_for_target(const LoadCase& as_run, const TargetErrorChoice::Attempt& missed, double target);
+
+/// The factor on a path's increments for which its first-order increment error, measured as the
+/// change `relative_change` that halving them makes, meets `target` (with a margin of 15%);
+/// 1 where it already does, at most 16.
+int increments_factor_for_target(double relative_change, double target);
 
 /// mesh.target_error: the contact nodes for a relative error `target` of the final P, from an
 /// estimate `relative_error` measured at `contact_nodes` and the error's order (with a margin of
