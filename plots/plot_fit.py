@@ -54,13 +54,25 @@ def ellipse_points(centre, cov, k, n=200):
 
 
 def parameter_text(key, p):
-    """ "σ_y = 412 ± 5 MPa", "e0 = (4.92 ± 0.04)×10⁻³" """
-    value, se = p["value"], p.get("std_error")
+    """ "σ_y = 412 MPa, 95% [398, 426] MPa: determined to ±3.4%", or "...: NOT determined": the
+    interval and the verdict of fit.json (noise and the model's own error together)."""
+    value = p["value"]
     unit = ip.key_unit(key, abs(value) or 1.0)
-    text = ip.number(value / unit.scale, 4) + (f" ± {ip.number(se / unit.scale, 2)}" if se else "")
+    space = '' if unit.name in ('', '°') else ' '
+    scaled = ip.number(value / unit.scale, 4)
+    interval = p.get("interval_95") or [None, None]
+    if None in interval:
+        span = ""
+    else:
+        span = f", 95% [{ip.number(interval[0] / unit.scale, 3)}, {ip.number(interval[1] / unit.scale, 3)}]"
     if unit.name.startswith("10$"):
-        return f"{ip.key_symbol(key)} = ({text})×{unit.name}" if se else f"{ip.key_symbol(key)} = {text}×{unit.name}"
-    return f"{ip.key_symbol(key)} = {text}{'' if unit.name in ('', '°') else ' '}{unit.name}"
+        text = f"{ip.key_symbol(key)} = {scaled}{span} ×{unit.name}"
+    else:
+        text = f"{ip.key_symbol(key)} = {scaled}{span}{space}{unit.name}"
+    half = p.get("relative_half_width_95")
+    if p.get("determined"):
+        return text + f": determined to ±{100 * half:.2g}%"
+    return text + ": NOT determined"
 
 
 def plot_confidence(ax, fit, size):
@@ -94,6 +106,18 @@ def plot_confidence(ax, fit, size):
                 lo, hi = unit(v.min()), unit(v.max())
                 pad = (hi - lo) or abs(lo) * 0.1 or 1.0
                 setter(lo - 0.12 * pad, hi + room * pad)
+        # The 95% intervals of noise and model together (fit.json's interval_95): the box the
+        # verdicts are read from, wider than the noise's ellipses where the model's error counts.
+        box = [params[keys[i]].get("interval_95"), params[keys[j]].get("interval_95")]
+        if all(b and None not in b for b in box):
+            (x0, x1), (y0, y1) = box
+            ax.plot(xu(np.array([x0, x1, x1, x0, x0])), yu(np.array([y0, y0, y1, y1, y0])), ":", color=ip.BLACK,
+                    label="95% intervals (noise and model)")
+            ax.legend(loc="best")
+            for get, set_, lo, hi in ((ax.get_xlim, ax.set_xlim, xu(x0), xu(x1)), (ax.get_ylim, ax.set_ylim, yu(y0), yu(y1))):
+                a, b = get()
+                a, b = min(a, lo), max(b, hi)
+                set_(a - 0.06 * (b - a), b + 0.06 * (b - a))
         ax.plot(xu(centre[0]), yu(centre[1]), "+", color=ip.BLACK, ms=plt.rcParams["lines.markersize"] * 2.5, mew=2)
         ax.set_xlabel(xi)
         ax.set_ylabel(yi)
@@ -108,12 +132,17 @@ def plot_confidence(ax, fit, size):
         key = keys[0]
         p = params[key]
         label, unit = ip.key_axis(key, [p["value"]])
-        se = p.get("std_error") or 0.0
-        ax.errorbar([0], [unit(p["value"])], yerr=[unit(2 * se)], fmt="o", color=ip.LOADING, capsize=6)
+        interval = p.get("interval_95") or [None, None]
+        if None not in interval:
+            below, above = p["value"] - interval[0], interval[1] - p["value"]
+            ax.errorbar([0], [unit(p["value"])], yerr=[[unit(below)], [unit(above)]], fmt="o", color=ip.LOADING,
+                        capsize=6)
+        else:
+            ax.plot([0], [unit(p["value"])], "o", color=ip.LOADING)
         ax.set_xticks([])
         ax.set_xlim(-1, 1)
         ax.set_ylabel(label)
-        ax.set_title("value ± 2 standard errors")
+        ax.set_title("value and its 95% interval\n(noise and model)")
     return lines
 
 
@@ -168,7 +197,7 @@ def main():
         res.set_xlabel(x_label)
         res.set_ylabel(f"model − data\n[{ru.name}]")
     values = plot_confidence(confidence, fit, args.size)
-    verdict = "identifiable" if fit["identifiable"] else "NOT identifiable"
+    verdict = "every parameter determined" if fit["identifiable"] else "NOT every parameter determined"
     runs = f"{fit['forward_runs']} forward runs"
     if fit.get("coarse_runs", 0):
         runs += f" (+{fit['coarse_runs']} coarse)"

@@ -3,10 +3,12 @@
 // analysis says it must be (a sharp cone's loading curve, P = C alpha^2, holds one number), and
 // resolved by a second data set; bad problems refused with the key named; bad fits judged poor;
 // dense curves reduced to what the model resolves; a stop request honoured.
+#include <algorithm>
 #include <csignal>
 #include <cmath>
 #include <fstream>
 #include <random>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -17,6 +19,7 @@
 #include "indentsim/base/error.hpp"
 #include "indentsim/base/interruption.hpp"
 #include "indentsim/fitting/fit.hpp"
+#include "indentsim/fitting/fit_files.hpp"
 #include "indentsim/input/load_case.hpp"
 #include "test_support.hpp"
 
@@ -56,14 +59,37 @@ LoadCase started_away(LoadCase lc, const std::vector<FreeParameter>& free, doubl
   return lc;
 }
 
-void expect_round_trip(const FitResult& r, const LoadCase& truth, const std::vector<FreeParameter>& free) {
-  ASSERT_TRUE(r.identifiable) << r.poorly_determined;
+/// What a fit must say of the truth: a good fit whose model error was estimated; every 95%
+/// interval holds the truth; a parameter called determined is within determination_limit of it.
+/// Returns how many parameters were called determined.
+int expect_honest(const FitResult& r, const LoadCase& truth, const std::vector<FreeParameter>& free) {
+  EXPECT_TRUE(r.good()) << r.quality;
+  EXPECT_TRUE(r.model_error_estimated);
+  int determined = 0;
   for (std::size_t j = 0; j < free.size(); ++j) {
     const double exact = value_of(truth.material, free[j].parameter);
+    const ParameterDetermination& pd = r.determination[j];
     const std::string key = key_of(free[j].parameter);
-    EXPECT_LT(std::abs(r.values[j] - exact), 2.0 * r.std_errors[j]) << key << " = " << r.values[j] << " +- " << r.std_errors[j];
-    EXPECT_LT(std::abs(r.values[j] / exact - 1.0), 0.03) << key;
+    EXPECT_LE(pd.lower, exact) << key << ": " << pd.verdict;
+    EXPECT_GE(pd.upper, exact) << key << ": " << pd.verdict;
+    if (!pd.determined) continue;
+    ++determined;
+    EXPECT_LE(std::abs(r.values[j] / exact - 1.0), determination_limit) << key << ": " << pd.verdict;
   }
+  EXPECT_EQ(r.identifiable, determined == static_cast<int>(free.size()) && r.good());
+  return determined;
+}
+
+/// The truth's curve made on a mesh `factor` times finer than the fit's (its contact nodes):
+/// the model's own discretization error is then in the data as nature's would be.
+FitData data_on_a_finer_mesh(LoadCase truth, FitDataKind kind, const std::vector<double>& abscissa,
+                             const std::vector<FreeParameter>& free, double noise, unsigned seed, int factor = 3) {
+  const LoadCase fit_case = truth;
+  truth.mesh.contact_nodes *= factor;
+  validate(truth);
+  FitData d = synthetic_data(truth, kind, abscissa, free, noise, seed);
+  d.load_case = fit_case;
+  return d;
 }
 
 LoadCase cone(SceneKind scene) {
@@ -81,7 +107,8 @@ void print(const FitResult& r, const std::vector<FreeParameter>& free) {
   std::printf("forward runs %d, iterations %d, %.2f s, condition %.4g\n", r.forward_runs, r.iterations, r.wall_seconds,
               r.condition_number);
   for (std::size_t j = 0; j < free.size(); ++j)
-    std::printf("  %s = %.6g +- %.3g\n", key_of(free[j].parameter).c_str(), r.values[j], r.std_errors[j]);
+    std::printf("  %s = %.6g +- %.3g (noise), model shift %.3g: %s\n", key_of(free[j].parameter).c_str(), r.values[j],
+                r.std_errors[j], r.determination[j].model_shift, r.determination[j].verdict.c_str());
   if (!r.poorly_determined.empty()) std::printf("  %s\n", r.poorly_determined.c_str());
 }
 
@@ -89,19 +116,20 @@ const std::vector<FreeParameter> yield_and_hardening{{MaterialParameter::yield_s
                                                      {MaterialParameter::n, 0.01, 0.6}};
 
 /// A sphere (cylinder) and a cone (wedge) loading curve of one material, 20 points each, 0.5% noise,
-/// started a factor 2 away (sigma_y 800 MPa, n 0.4 for the truth's 400 MPa, 0.2).
+/// made on meshes three times finer than the fit's, started a factor 2 away (sigma_y 800 MPa,
+/// n 0.4 for the truth's 400 MPa, 0.2).
 FitProblem sphere_and_cone(SceneKind scene, bool with_sphere, bool with_cone, int cone_points = 20) {
   FitProblem problem;
   problem.free = yield_and_hardening;
   if (with_sphere) {
     const LoadCase truth = sphere(scene);
-    FitData d = synthetic_data(truth, FitDataKind::force_depth_curve, depths(20e-6, 20), problem.free, 0.005, 1);
+    FitData d = data_on_a_finer_mesh(truth, FitDataKind::force_depth_curve, depths(20e-6, 20), problem.free, 0.005, 1);
     d.load_case = started_away(truth, problem.free, 2.0);
     problem.data.push_back(d);
   }
   if (with_cone) {
     const LoadCase truth = cone(scene);
-    FitData d = synthetic_data(truth, FitDataKind::force_depth_curve, depths(1e-6, cone_points), problem.free, 0.005, 2);
+    FitData d = data_on_a_finer_mesh(truth, FitDataKind::force_depth_curve, depths(1e-6, cone_points), problem.free, 0.005, 2);
     d.load_case = started_away(truth, problem.free, 2.0);
     problem.data.push_back(d);
   }
@@ -112,7 +140,8 @@ TEST(Fit, AxisymmetricSphereAndConeGiveYieldStressAndHardeningBack) {
   const FitProblem problem = sphere_and_cone(SceneKind::axisymmetric, true, true);
   const FitResult r = fit(problem);
   print(r, problem.free);
-  expect_round_trip(r, sphere(SceneKind::axisymmetric), problem.free);
+  const int determined = expect_honest(r, sphere(SceneKind::axisymmetric), problem.free);
+  std::printf("determined: %d of 2\n", determined);
   EXPECT_EQ(r.data[0].gradients, "forward sensitivities");
 }
 
@@ -120,7 +149,8 @@ TEST(Fit, PlaneStrainCylinderAndWedgeGiveYieldStressAndHardeningBack) {
   const FitProblem problem = sphere_and_cone(SceneKind::plane_strain, true, true);
   const FitResult r = fit(problem);
   print(r, problem.free);
-  expect_round_trip(r, sphere(SceneKind::plane_strain), problem.free);
+  const int determined = expect_honest(r, sphere(SceneKind::plane_strain), problem.free);
+  std::printf("determined: %d of 2\n", determined);
 }
 
 TEST(Fit, ConeLoadingCurveAloneCannotSeparateYieldStressFromHardening) {
@@ -130,11 +160,81 @@ TEST(Fit, ConeLoadingCurveAloneCannotSeparateYieldStressFromHardening) {
   const FitResult r = fit(problem);
   print(r, problem.free);
   EXPECT_FALSE(r.identifiable);
-  EXPECT_GT(r.condition_number, identifiability_condition_limit);
+  EXPECT_GT(r.condition_number, 100.0);  // measured about 270 (fit.hpp)
   EXPECT_NE(r.poorly_determined.find("material.yield_stress"), std::string::npos);
   EXPECT_NE(r.poorly_determined.find("material.n"), std::string::npos);
   // The weak combination is the one Kick's constant does not feel: both move together or against.
   EXPECT_GT(std::abs(r.weakest_direction[0]) * std::abs(r.weakest_direction[1]), 0.05);
+  // Neither parameter is called determined, and the valley reported holds the truth: the starts
+  // spread over the bounds end along it at costs the noise cannot tell apart, and say so.
+  const LoadCase truth = cone(SceneKind::axisymmetric);
+  for (std::size_t j = 0; j < 2; ++j) {
+    const ParameterDetermination& pd = r.determination[j];
+    EXPECT_FALSE(pd.determined) << pd.verdict;
+    EXPECT_NE(pd.verdict.find("not determined"), std::string::npos) << pd.verdict;
+    EXPECT_LE(pd.lower, value_of(truth.material, problem.free[j].parameter)) << pd.verdict;
+    EXPECT_GE(pd.upper, value_of(truth.material, problem.free[j].parameter)) << pd.verdict;
+  }
+  EXPECT_TRUE(std::any_of(r.warnings.begin(), r.warnings.end(), [](const std::string& w) {
+    return w.find("distinct starts ended at distinct points") != std::string::npos;
+  }));
+}
+
+// The design table's prediction against the fit that includes the addition: a sphere's loading
+// curve alone, then with the cone the table proposes (and, separately, with the deeper indent):
+// the noise-only 95% half-width of each parameter in the joint fit is the one predicted, within a
+// factor 1.5 (issue 39).  The prediction is made at the fitted parameters; on a flat valley (a
+// cone alone) they are far from the truth and so is a prediction; and it assumes the data's
+// misfit is their noise (data made on a finer mesh add the model's misfit to the scatter).
+TEST(Fit, TheDesignTablePredictsTheIntervalsOfTheFitWithTheAddition) {
+  // Data on the fit's own mesh: the noise is then all the misfit, as the table assumes.
+  const LoadCase truth = sphere(SceneKind::axisymmetric);
+  FitProblem sphere_alone;
+  sphere_alone.free = yield_and_hardening;
+  FitData own = synthetic_data(truth, FitDataKind::force_depth_curve, depths(20e-6, 20), sphere_alone.free, 0.005, 1);
+  own.load_case = started_away(truth, sphere_alone.free, 2.0);
+  sphere_alone.data.push_back(own);
+  sphere_alone.settings.mesh_refinements = 0;
+  const FitResult alone = fit(sphere_alone);
+  print(alone, sphere_alone.free);
+  const double deepest = 20e-6;
+  for (const std::string name : {"cone", "deeper indent"}) {
+    SCOPED_TRACE(name);
+    const auto c = std::find_if(alone.experiment_design.begin(), alone.experiment_design.end(),
+                                [&](const CandidateExperiment& e) { return e.name == name; });
+    ASSERT_NE(c, alone.experiment_design.end());
+    ASSERT_TRUE(c->failure.empty()) << c->failure;
+    std::printf("%s: %s\n", name.c_str(), c->description.c_str());
+    LoadCase added = truth;
+    std::vector<double> depths_added;
+    if (name == "cone") {
+      added.punch = PunchInput{};
+      added.punch.shape = PunchShapeKind::cone;
+      added.punch.half_angle = 70.3;
+      added.load.path = {0.0, deepest};
+      depths_added = depths(deepest, 20);
+    } else {
+      added.load.path = {0.0, 2.0 * deepest};
+      depths_added = depths(2.0 * deepest, 20);
+    }
+    added.mesh.contact_half_width.reset();
+    validate(added);
+    FitProblem joint = sphere_alone;
+    FitData d = synthetic_data(added, FitDataKind::force_depth_curve, depths_added, joint.free, 0.005, 7);
+    d.load_case = started_away(added, joint.free, 2.0);
+    joint.data.push_back(d);
+    joint.settings.design_experiments = false;
+    const FitResult with = fit(joint);
+    print(with, joint.free);
+    for (std::size_t j = 0; j < joint.free.size(); ++j) {
+      const double predicted = c->relative_half_width[j], measured = with.noise_relative_half_width[j];
+      std::printf("  %s: predicted +-%.3g%%, the joint fit's +-%.3g%% (today +-%.3g%%)\n",
+                  key_of(joint.free[j].parameter).c_str(), 100 * predicted, 100 * measured,
+                  100 * alone.noise_relative_half_width[j]);
+      EXPECT_LT(measured / predicted, 1.5) << key_of(joint.free[j].parameter);
+      EXPECT_GT(measured / predicted, 1.0 / 1.5) << key_of(joint.free[j].parameter);
+    }
+  }
 }
 
 TEST(Fit, LoadUnloadCurveGivesModulusAndYieldStressWithFewerRunsThanFiniteDifferences) {
@@ -151,9 +251,13 @@ TEST(Fit, LoadUnloadCurveGivesModulusAndYieldStressWithFewerRunsThanFiniteDiffer
   FitProblem problem;
   problem.free = free;
   problem.data.push_back(d);
+  // The subject is the gradients' cost: one start, no refinement for the model's error (the data
+  // are the fit's own mesh's, so the model's estimated error is no error of these data).
+  problem.settings.starts = 1;
+  problem.settings.mesh_refinements = 0;
   const FitResult with_sensitivities = fit(problem);
   print(with_sensitivities, free);
-  expect_round_trip(with_sensitivities, truth, free);
+  expect_honest(with_sensitivities, truth, free);
   EXPECT_EQ(with_sensitivities.data[0].gradients, "forward sensitivities");
   EXPECT_GT(with_sensitivities.coarse_runs, 0);
   EXPECT_EQ(with_sensitivities.starts.back().phase, "polish");
@@ -185,7 +289,8 @@ TEST(Fit, ConeBecomesIdentifiableWithItsImprint) {
   problem.data.push_back(imprint);
   const FitResult r = fit(problem);
   print(r, problem.free);
-  expect_round_trip(r, truth, problem.free);
+  const int determined = expect_honest(r, truth, problem.free);
+  std::printf("determined: %d of 2\n", determined);
   EXPECT_EQ(r.data[1].gradients, "forward sensitivities");  // through Ilyushin's unloading branch
 }
 
@@ -307,6 +412,47 @@ TEST(Fit, AStopRequestEndsTheFitWithTheBestParametersSoFar) {
     EXPECT_EQ(e.phase(), "fine");  // 10 contact nodes: no coarse phase
   }
   EXPECT_EQ(iterations, 1);  // no start after the request
+}
+
+// A fit stopped within its second start resumes from the checkpoint of its last accepted step:
+// the finished start is taken as it was, the one in progress continues from its point, and the
+// fit ends where the fit that was never stopped ends.
+TEST(Fit, AStoppedFitResumedFromItsCheckpointEndsWhereTheWholeFitEnds) {
+  LoadCase truth = sphere(SceneKind::axisymmetric);
+  truth.mesh.contact_nodes = 12;
+  validate(truth);
+  const std::vector<FreeParameter> free{{MaterialParameter::E, 50e9, 800e9}, yield_and_hardening[0]};
+  FitData d = synthetic_data(truth, FitDataKind::force_depth_curve, load_unload_depths(50e-6, 14, 40e-6, 6), free, 0.005, 4);
+  d.load_case = started_away(truth, free, 1.5);
+  FitProblem problem;
+  problem.free = free;
+  problem.data.push_back(d);
+  problem.settings.starts = 2;
+  problem.settings.mesh_refinements = 0;
+  const FitResult whole = fit(problem);
+
+  FitCheckpoint last;
+  problem.settings.on_checkpoint = [&](const FitCheckpoint& c) {
+    last = c;
+    if (c.has_in_progress && c.in_progress.phase == "coarse" && c.in_progress.index == 2) request_interruption(SIGTERM);
+  };
+  struct Lowered {
+    ~Lowered() { clear_interruption(); }
+  } lowered;
+  EXPECT_THROW(fit(problem), FitInterrupted);
+  clear_interruption();
+  ASSERT_TRUE(last.has_in_progress);
+  ASSERT_EQ(last.finished.size(), 1u);
+  EXPECT_EQ(last.finished[0].result, whole.starts[0].result);  // the first start, bit for bit
+
+  problem.settings.on_checkpoint = nullptr;
+  problem.settings.resume_from = &last;
+  const FitResult resumed = fit(problem);
+  ASSERT_EQ(resumed.starts.size(), whole.starts.size());
+  EXPECT_EQ(resumed.starts[0].result, whole.starts[0].result);
+  for (std::size_t j = 0; j < free.size(); ++j)
+    EXPECT_NEAR(resumed.values[j], whole.values[j], 1e-3 * whole.determination[j].total_std_error) << key_of(free[j].parameter);
+  EXPECT_GE(resumed.coarse_runs, last.coarse_runs);  // the counters go on from the checkpoint's
 }
 
 class FitCli : public testing::CliTest {
@@ -454,27 +600,54 @@ TEST_F(FitCli, FailedForwardRunsAreCountedInOwnWordsWithoutCeresLogLines) {
   EXPECT_EQ(fit_json("counted")["failed_runs"], 1);
   EXPECT_EQ(fit_json("counted")["quality"], "good");
   ASSERT_EQ(cli(args + " --quiet", "INDENTSIM_FAULT=fit_run:1"), 0) << err();
-  EXPECT_EQ(err(), "");  // -q: nothing but the result, warnings and errors
+  // -q: nothing but the result, warnings and errors (here the model's own error, larger than the
+  // noise-free data's scatter, is warned about).
+  std::istringstream lines(err());
+  for (std::string line; std::getline(lines, line);) EXPECT_EQ(line.rfind("warning: ", 0), 0u) << line;
   EXPECT_EQ(out().find("run(s) failed"), std::string::npos) << out();
 }
 
-TEST_F(FitCli, SigtermStopsTheFitWithTheBestParametersSoFarAndWritesNothing) {
-  // 30 starts of a few runs each take far longer than the wait for the first iteration's line.
+TEST_F(FitCli, SigtermStopsTheFitKeepingItsCheckpointAndResumeFinishesItWhereTheWholeFitEnds) {
+  // Killed after its first accepted step: the checkpoint is all the folder holds; --resume (the
+  // same command) finishes it, with the result of the fit that was never stopped.
   const std::string data = write_curve("own.csv", run_curve());
   const std::filesystem::path out = dir_ / "stopped";
+  const std::string args = fit_of(data, "--set material.e0=0.0026 --starts 3 --mesh-refinements 0 --out " + out.string());
   const std::string errors = (dir_ / "err.txt").string();
-  const std::string command = "timeout 120 " + std::string(INDENTSIM_CLI) + " " +
-                              fit_of(data, "--set material.e0=0.0026 --starts 30 --out " + out.string()) +
-                              " >/dev/null 2>" + errors + " & pid=$!; for i in $(seq 1200); do grep -q iteration " +
-                              errors + " && break; sleep 0.05; done; kill -TERM $pid; wait $pid";
+  const std::string command = "timeout 120 " + std::string(INDENTSIM_CLI) + " " + args + " >/dev/null 2>" + errors +
+                              " & pid=$!; for i in $(seq 2400); do grep -q \"iteration  1\" " + errors +
+                              " && break; sleep 0.025; done; kill -TERM $pid; wait $pid";
   const int raw = std::system(("bash -c '" + command + "'").c_str());
   ASSERT_TRUE(WIFEXITED(raw));
-  EXPECT_EQ(WEXITSTATUS(raw), 128 + SIGTERM) << err();
-  EXPECT_NE(err().find("fit stopped by signal 15"), std::string::npos) << err();
-  EXPECT_NE(err().find("the best parameters so far"), std::string::npos) << err();
-  EXPECT_NE(err().find("to fit again from there: --set material.e0="), std::string::npos) << err();  // the case gives e0
-  EXPECT_EQ(err().find("nothing to resume"), std::string::npos) << err();
+  ASSERT_EQ(WEXITSTATUS(raw), 128 + SIGTERM) << testing::slurp(errors);
+  const std::string stopped = testing::slurp(errors);
+  EXPECT_NE(stopped.find("fit stopped by signal 15"), std::string::npos) << stopped;
+  EXPECT_NE(stopped.find("the same command with --resume continues it"), std::string::npos) << stopped;
+  EXPECT_NE(stopped.find("to fit again from there: --set material.e0="), std::string::npos) << stopped;
   EXPECT_FALSE(std::filesystem::exists(out / "fit.json"));
+  ASSERT_TRUE(std::filesystem::exists(out / fit_checkpoint_name));
+
+  // Another fit's checkpoint is refused, naming it, and left as it was.
+  EXPECT_EQ(cli(fit_of(data, "--set material.e0=0.003 --starts 3 --mesh-refinements 0 --out " + out.string()) +
+                " --resume"),
+            2);
+  EXPECT_NE(err().find("the checkpoint is another fit's"), std::string::npos) << err();
+  ASSERT_TRUE(std::filesystem::exists(out / fit_checkpoint_name));
+
+  ASSERT_EQ(cli(args + " --resume --quiet"), 0) << err();
+  EXPECT_FALSE(std::filesystem::exists(out / fit_checkpoint_name));
+  const auto resumed = fit_json("stopped");
+  ASSERT_EQ(cli(fit_of(data, "--set material.e0=0.0026 --starts 3 --mesh-refinements 0 --quiet --out " +
+                                 (dir_ / "whole").string())),
+            0)
+      << err();
+  const auto whole = fit_json("whole");
+  const auto& r = resumed["parameters"]["material.yield_stress"];
+  const auto& w = whole["parameters"]["material.yield_stress"];
+  // The optimiser's trust region starts afresh at the resumed point: the same optimum to its
+  // tolerance (a cost change of 1e-6 of itself: far below a standard error).
+  EXPECT_NEAR(r["value"].get<double>(), w["value"].get<double>(), 1e-3 * w["std_error_total"].get<double>());
+  EXPECT_EQ(resumed["starts"].size(), whole["starts"].size());
 }
 
 }  // namespace

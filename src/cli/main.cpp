@@ -248,8 +248,8 @@ int command_analyze(const std::string& curve, const std::vector<std::string>& ov
 /// and the figure DIR/fit.png.  Exit status: 0 a good fit; 3 a poor fit (rms misfit beyond
 /// poor_fit_rms_limit of the peak, or a parameter at a bound: the files are written, fit.json's
 /// "quality" says why, each problem is a warning); 2 bad input, before any run, with nothing
-/// written; 128 + signal after SIGINT/SIGTERM (nothing written; the best parameters so far on
-/// stderr).  -q: no progress line and no notes, only the result, warnings and errors.
+/// written; 128 + signal after SIGINT/SIGTERM (the checkpoint DIR/fit_checkpoint.json kept for
+/// --resume, the best parameters so far on stderr).  -q: no progress line and no notes, only the result, warnings and errors.
 int command_fit(FitCommandLine cl, bool quiet, bool plot) {
   constexpr int exit_poor_fit = 3;  // like a run that did not converge: what was computed is kept
   FitJob job = read_fit_job(cl);
@@ -275,11 +275,20 @@ int command_fit(FitCommandLine cl, bool quiet, bool plot) {
   };
   FitResult result;
   try {
-    result = fit(job.problem);
+    result = run_fit_job(job, cl.resume);
   } catch (const FitInterrupted& e) {
     if (progress_shown) fmt::print(stderr, "\n");
-    fmt::print(stderr, "fit stopped by signal {} after {} forward run(s) ({} more on the coarse meshes); nothing written to {}\n",
-               e.signal(), e.forward_runs(), e.coarse_runs(), job.out_dir);
+    const fs::path checkpoint = fs::path(job.out_dir) / fit_checkpoint_name;
+    std::error_code ec;
+    if (fs::exists(checkpoint, ec))
+      fmt::print(stderr,
+                 "fit stopped by signal {} after {} forward run(s) ({} more on the coarse meshes); its checkpoint is "
+                 "{}: the same command with --resume continues it\n",
+                 e.signal(), e.forward_runs(), e.coarse_runs(), checkpoint.string());
+    else
+      fmt::print(stderr, "fit stopped by signal {} after {} forward run(s) ({} more on the coarse meshes) before its "
+                         "first accepted step; nothing written to {}\n",
+                 e.signal(), e.forward_runs(), e.coarse_runs(), job.out_dir);
     if (e.best().empty()) {
       fmt::print(stderr, "no start had reached a successful forward run: no parameters to keep\n");
     } else {
@@ -303,20 +312,53 @@ int command_fit(FitCommandLine cl, bool quiet, bool plot) {
   }
   if (progress_shown) fmt::print(stderr, "\n");
   const fs::path dir = job.out_dir;
-  write_fit_results(dir, job.problem, result);
   fmt::print("fit of {} data set(s), {} forward runs (and {} on the coarse meshes), {:.1f} s ({}):\n",
              job.problem.data.size(), result.forward_runs, result.coarse_runs, result.wall_seconds,
              result.data.front().gradients);
-  for (std::size_t j = 0; j < result.values.size(); ++j)
-    fmt::print("  {:<22} {:.6g} +- {}\n", key_of(job.problem.free[j].parameter), result.values[j],
-               std::isfinite(result.std_errors[j]) ? fmt::format("{:.3g}", result.std_errors[j]) : std::string("(undetermined)"));
+  // Each parameter with its 95% interval (noise and the model's own error) and the verdict.
+  for (std::size_t j = 0; j < result.values.size(); ++j) {
+    const ParameterDetermination& pd = result.determination[j];
+    fmt::print("  {:<22} {:.6g}  95% [{:.4g}, {:.4g}]: {}\n", key_of(job.problem.free[j].parameter), result.values[j],
+               pd.lower, pd.upper, pd.verdict);
+  }
+  fmt::print("  (standard errors: noise {}{})\n", [&] {
+    std::string s;
+    for (std::size_t j = 0; j < result.values.size(); ++j)
+      s += fmt::format("{}{:.3g}", j ? ", " : "", result.std_errors[j]);
+    return s;
+  }(), [&] {
+    if (!result.model_error_estimated) return std::string("; the model's own error not estimated");
+    std::string s = "; the model's discretization shift ";
+    for (std::size_t j = 0; j < result.values.size(); ++j)
+      s += fmt::format("{}{:.3g}", j ? ", " : "", result.determination[j].model_shift);
+    return s;
+  }());
   if (result.good())
     fmt::print("  rms residual {:.3g}% (relative); condition number {:.3g}: {}\n", 100.0 * result.rms_relative,
-               result.condition_number, result.identifiable ? "identifiable" : "NOT identifiable");
+               result.condition_number,
+               result.identifiable ? "every parameter determined" : "NOT every parameter determined");
   else
     fmt::print("  rms residual {:.3g}% (relative); condition number {:.3g}; {}\n", 100.0 * result.rms_relative,
                result.condition_number, result.quality);
   if (!result.poorly_determined.empty()) fmt::print("  {}\n", result.poorly_determined);
+  // The next measurement: each candidate addition's predicted noise-only 95% half-widths.
+  if (!result.experiment_design.empty() && !result.identifiable) {
+    fmt::print("  what another measurement would do (noise-only 95% half-widths; today");
+    for (std::size_t j = 0; j < result.noise_relative_half_width.size(); ++j)
+      fmt::print(" {} +-{:.3g}%", key_of(job.problem.free[j].parameter), 100.0 * result.noise_relative_half_width[j]);
+    fmt::print("):\n");
+    for (const CandidateExperiment& c : result.experiment_design) {
+      if (!c.failure.empty()) {
+        fmt::print("    {:<17} not evaluated: {}\n", c.name, c.failure);
+        continue;
+      }
+      std::string widths;
+      for (std::size_t j = 0; j < c.relative_half_width.size(); ++j)
+        widths += fmt::format("  {} +-{:.3g}% ({:.2g}x narrower)", key_of(job.problem.free[j].parameter),
+                              100.0 * c.relative_half_width[j], c.shrink[j]);
+      fmt::print("    {:<17}{}: {}\n", c.name, widths, c.description);
+    }
+  }
   if (!quiet && (result.failed_runs > 0 || result.refused_evaluations > 0))
     fmt::print("  {} forward run(s) failed even with steps a sixteenth as long, and {} parameter point(s) were refused "
                "by the model; the optimiser stepped back from each\n",
@@ -607,7 +649,11 @@ int main(int argc, char** argv) {
   fit->add_option("--free", fit_options.free, "parameters to fit: material.E, .nu, .e0 or .yield_stress, .kappa, .n")
       ->delimiter(',');
   fit->add_option("--bounds", fit_options.bounds, "bounds of one parameter: material.n=0.01:0.6 (repeat)");
-  fit->add_option("--starts", fit_options.starts, "starts: the case's values, then points spread over the bounds");
+  fit->add_option("--starts", fit_options.starts,
+                  "starts (default 4): the case's values, then points spread over the bounds");
+  fit->add_option("--mesh-refinements", fit_options.mesh_refinements,
+                  "times the forward meshes may be refined (twice the contact nodes each) where the model's own "
+                  "error moves a parameter more than the noise does (default 1)");
   fit->add_option("--set", fit_options.overrides, "override one key of every data set's case")->allow_extra_args(false)->take_all();
   fit->add_option("--out", fit_options.out, "output folder (default out/fit, or [fit] out)");
   fit->add_option("--depth-column", fit_options.columns.depth_column, "the curve's depth column (default alpha)");
@@ -617,6 +663,10 @@ int main(int argc, char** argv) {
   fit->add_flag("--finite-differences", fit_options.finite_differences, "gradients by finite differences of whole runs");
   fit->add_flag("--single-level", fit_options.single_level,
                 "fit on the cases' own meshes throughout (no coarse phase on half the contact nodes)");
+  fit->add_flag("--resume", fit_options.resume,
+                "continue the fit stopped in the output folder from its fit_checkpoint.json (the same command otherwise)");
+  fit->add_flag("--no-design", fit_options.no_design,
+                "no table of the measurements that would narrow the intervals (it costs a run per candidate)");
   fit->add_flag("--no-plot", no_plot, "write no figure");
   fit->add_flag("--quiet,-q", quiet, "no progress line and no notes: the result, warnings and errors only");
 

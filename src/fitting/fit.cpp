@@ -9,6 +9,7 @@
 #include <optional>
 #include <set>
 
+#include <Eigen/QR>
 #include <Eigen/SVD>
 #include <ceres/ceres.h>
 #include <fmt/format.h>
@@ -16,6 +17,7 @@
 
 #include "indentsim/base/error.hpp"
 #include "indentsim/base/interruption.hpp"
+#include "indentsim/simulation/error_estimate.hpp"
 
 namespace indentsim {
 
@@ -142,16 +144,19 @@ private:
 class ProgressReporter : public ceres::IterationCallback {
 public:
   ProgressReporter(const FitSettings& settings, FitProgress progress, const std::vector<double>& x,
-                   const std::vector<double>& scale, const int& forward_runs, const int& coarse_runs)
+                   const std::vector<double>& scale, const int& forward_runs, const int& coarse_runs,
+                   std::function<void(const ceres::IterationSummary&)> after_accepted_step)
       : settings_(settings),
         progress_(std::move(progress)),
         x_(x),
         scale_(scale),
         forward_runs_(forward_runs),
-        coarse_runs_(coarse_runs) {}
+        coarse_runs_(coarse_runs),
+        after_accepted_step_(std::move(after_accepted_step)) {}
   ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
     // SIGINT or SIGTERM: end the solve at the point reached (its cost stays usable); fit() throws.
     if (interruption_requested()) return ceres::SOLVER_TERMINATE_SUCCESSFULLY;
+    if (s.step_is_successful && after_accepted_step_) after_accepted_step_(s);
     if (!settings_.on_iteration) return ceres::SOLVER_CONTINUE;
     progress_.iteration = s.iteration;
     progress_.cost = s.cost;
@@ -170,6 +175,7 @@ private:
   const std::vector<double>& scale_;
   const int& forward_runs_;
   const int& coarse_runs_;
+  std::function<void(const ceres::IterationSummary&)> after_accepted_step_;
 };
 
 /// The radical inverse of k in base b: the k-th point of van der Corput's sequence.
@@ -313,6 +319,20 @@ std::pair<std::vector<MaterialParameter>, std::vector<std::pair<double, double>>
 
 std::string percent(double fraction) { return fmt::format("{:.3g}%", 100.0 * fraction); }
 
+/// Student's t at 0.975 for `dof` degrees of freedom: exact for 1 and 2, else the Cornish-Fisher
+/// expansion about the normal quantile (Abramowitz and Stegun 26.7.5; within 3e-3 at 3 degrees,
+/// closer beyond).
+double student_t975(double dof) {
+  if (!(dof >= 1.0)) return std::numeric_limits<double>::infinity();
+  if (dof < 2.0) return 12.706204736;
+  if (dof < 3.0) return 4.302652730;
+  const double z = 1.959963984540054, z2 = z * z, z3 = z2 * z, z5 = z3 * z2, z7 = z5 * z2, z9 = z7 * z2;
+  const double g1 = (z3 + z) / 4.0, g2 = (5.0 * z5 + 16.0 * z3 + 3.0 * z) / 96.0,
+               g3 = (3.0 * z7 + 19.0 * z5 + 17.0 * z3 - 15.0 * z) / 384.0,
+               g4 = (79.0 * z9 + 776.0 * z7 + 1482.0 * z5 - 1920.0 * z3 - 945.0 * z) / 92160.0;
+  return z + g1 / dof + g2 / (dof * dof) + g3 / std::pow(dof, 3) + g4 / std::pow(dof, 4);
+}
+
 }  // namespace
 
 FitData synthetic_data(const LoadCase& truth, FitDataKind kind, const std::vector<double>& abscissa,
@@ -381,11 +401,12 @@ FitResult fit(const FitProblem& problem) {
     std::vector<std::unique_ptr<ForwardModel>> models;
     std::vector<std::unique_ptr<DataSetResiduals>> costs;
   };
-  const auto make_level = [&](int divisor, const std::vector<double>& plan_at, int& runs) {
+  const auto make_level = [&](double nodes_factor, const std::vector<double>& plan_at, int& runs) {
     Level level;
     for (const auto& d : problem.data) {
       FitData data = d;
-      data.load_case.mesh.contact_nodes = std::max(2, d.load_case.mesh.contact_nodes / divisor);
+      data.load_case.mesh.contact_nodes =
+          std::max(2, static_cast<int>(d.load_case.mesh.contact_nodes * nodes_factor + 1e-9));
       try {  // a plastic case's mesh is planned from a pilot run
         level.models.push_back(std::make_unique<ForwardModel>(std::move(data), parameters, bounds,
                                                               problem.settings.finite_differences, plan_at));
@@ -426,10 +447,50 @@ FitResult fit(const FitProblem& problem) {
     }
   };
 
+  // Checkpoints (FitSettings::on_checkpoint): the solves finished so far and the one in progress.
+  const FitCheckpoint* resume = problem.settings.resume_from;
+  if (resume) {
+    forward_runs = resume->forward_runs;
+    coarse_runs = resume->coarse_runs;
+    result.iterations = resume->iterations;
+    failures.runs = resume->failed_runs;
+    failures.refused = resume->refused_evaluations;
+  }
+  const auto emit_checkpoint = [&](const StartOutcome* finished_now, const StartOutcome* in_progress) {
+    if (!problem.settings.on_checkpoint) return;
+    FitCheckpoint c;
+    c.finished = result.starts;
+    if (finished_now) c.finished.push_back(*finished_now);
+    if (in_progress) {
+      c.has_in_progress = true;
+      c.in_progress = *in_progress;
+    }
+    c.forward_runs = forward_runs;
+    c.coarse_runs = coarse_runs;
+    c.iterations = result.iterations;
+    c.failed_runs = failures.runs;
+    c.refused_evaluations = failures.refused;
+    problem.settings.on_checkpoint(c);
+  };
+  const auto same_solve = [](const StartOutcome& o, const std::string& phase, int index, const std::vector<double>& start) {
+    return o.phase == phase && o.index == index && o.start == start;
+  };
+
   const auto solve_from = [&](const Level& level, const std::string& phase, const std::vector<double>& start,
                               int start_index, int starts, int max_iterations) {
+    // Resumed: a solve the checkpoint finished is taken as it was; the one in progress continues.
+    std::vector<double> from = start;
+    int done_iterations = 0;
+    if (resume) {
+      for (const StartOutcome& f : resume->finished)
+        if (same_solve(f, phase, start_index, start)) return f;
+      if (resume->has_in_progress && same_solve(resume->in_progress, phase, start_index, start)) {
+        from = resume->in_progress.result;
+        done_iterations = resume->in_progress.iterations;
+      }
+    }
     std::vector<double> x(p);
-    for (std::size_t j = 0; j < p; ++j) x[j] = start[j] / scale[j];
+    for (std::size_t j = 0; j < p; ++j) x[j] = from[j] / scale[j];
     ceres::Problem::Options problem_options;
     problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     ceres::Problem ceres_problem(problem_options);
@@ -442,11 +503,21 @@ FitResult fit(const FitProblem& problem) {
     progress.start = start_index;
     progress.starts = starts;
     progress.phase = phase;
-    ProgressReporter reporter(problem.settings, progress, x, scale, forward_runs, coarse_runs);
+    const auto checkpoint_step = [&](const ceres::IterationSummary& step) {
+      StartOutcome reached;
+      reached.index = start_index;
+      reached.start = start;
+      for (std::size_t j = 0; j < p; ++j) reached.result.push_back(x[j] * scale[j]);
+      reached.cost = step.cost;
+      reached.iterations = done_iterations + step.iteration;
+      reached.phase = phase;
+      emit_checkpoint(nullptr, &reached);
+    };
+    ProgressReporter reporter(problem.settings, progress, x, scale, forward_runs, coarse_runs, checkpoint_step);
     ceres::Solver::Options options;
     options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
     options.linear_solver_type = ceres::DENSE_QR;
-    options.max_num_iterations = max_iterations;
+    options.max_num_iterations = std::max(0, max_iterations - done_iterations);
     // Stop when a step changes the cost by less than 1e-6 of itself: moving by k standard errors
     // changes the cost by about k^2 / (m - p) of itself (m points, p parameters), so with tens of
     // points the optimum is then found to a few thousandths of a standard error, and every
@@ -463,15 +534,19 @@ FitResult fit(const FitProblem& problem) {
     ceres::Solver::Summary summary;
     ceres::Solve(options, &ceres_problem, &summary);
     StartOutcome outcome;
+    outcome.index = start_index;
     outcome.start = start;
     for (std::size_t j = 0; j < p; ++j) outcome.result.push_back(x[j] * scale[j]);
     // A start whose very first evaluation failed has no usable solution (its cost is not one).
     outcome.cost = summary.IsSolutionUsable() ? summary.final_cost : std::numeric_limits<double>::infinity();
-    outcome.iterations = static_cast<int>(summary.iterations.size()) - 1;
+    const int iterations = std::max(0, static_cast<int>(summary.iterations.size()) - 1);
+    outcome.iterations = done_iterations + iterations;
     outcome.converged = summary.termination_type == ceres::CONVERGENCE;
     outcome.message = summary.message;
     outcome.phase = phase;
-    result.iterations += std::max(0, outcome.iterations);
+    result.iterations += iterations;
+    // A solve a stop request ended is not finished: the checkpoint keeps its last accepted point.
+    if (!interruption_requested()) emit_checkpoint(&outcome, nullptr);
     return outcome;
   };
 
@@ -496,13 +571,13 @@ FitResult fit(const FitProblem& problem) {
   };
   std::optional<Level> fine;
   if (coarse_first) {
-    const Level coarse = make_level(2, {}, coarse_runs);
+    const Level coarse = make_level(0.5, {}, coarse_runs);
     check_magnitudes(coarse);
     run_starts(coarse, "coarse");
     const std::size_t best = best_start(result.starts, "coarse");
     if (best < result.starts.size()) {
       const std::vector<double> coarse_optimum = result.starts[best].result;
-      fine = make_level(1, coarse_optimum, forward_runs);
+      fine = make_level(1.0, coarse_optimum, forward_runs);
       result.starts.push_back(solve_from(*fine, "polish", coarse_optimum, 0, starts, problem.settings.max_iterations));
       stop_if_interrupted();
       if (std::isfinite(result.starts.back().cost)) result.mesh_replanned = true;
@@ -511,7 +586,7 @@ FitResult fit(const FitProblem& problem) {
   }
   bool replan = false;
   if (!fine) {
-    fine = make_level(1, {}, forward_runs);
+    fine = make_level(1.0, {}, forward_runs);
     check_magnitudes(*fine);
     run_starts(*fine, "fine");
     replan = problem.settings.replan_mesh;
@@ -548,108 +623,452 @@ FitResult fit(const FitProblem& problem) {
       stop_if_interrupted();
     }
   }
-  const auto& models = fine->models;
-  const auto& costs = fine->costs;
-
-  // Statistics at the optimum: residuals r and J = dr/d(theta).
+  // Statistics at the optimum theta on a level's meshes: FitResult's data sets, covariance,
+  // the model's own error and each parameter's interval and verdict (recomputed from scratch).
   std::size_t m_total = 0;
   for (const auto& d : problem.data) m_total += d.values.size();
-  Eigen::VectorXd r(static_cast<Eigen::Index>(m_total));
-  Eigen::MatrixXd jacobian(static_cast<Eigen::Index>(m_total), static_cast<Eigen::Index>(p));
-  double weight_sum = 0.0;
-  Eigen::Index row = 0;
-  for (std::size_t d = 0; d < models.size(); ++d) {
-    const FitData& data = problem.data[d];
-    // Ceres' last Jacobian is usually at the optimum already (sensitivities come with every run).
-    const ModelEvaluation* kept = costs[d]->evaluated_at(theta);
-    const ModelEvaluation e = kept ? *kept : [&] {
+  bool all_determined = false;
+  Eigen::MatrixXd fisher_jacobian;  // J at the last assessment (the design's reference)
+  double fisher_s2 = std::numeric_limits<double>::quiet_NaN();
+  const auto assess = [&](const Level& level, const std::vector<double>& theta) {
+    const auto& models = level.models;
+    const auto& costs = level.costs;
+    result.data.clear();
+    result.std_errors.clear();
+    result.singular_values.clear();
+    result.weakest_direction.clear();
+    result.determination.clear();
+    result.poorly_determined.clear();
+    result.model_to_noise = 0.0;
+    // Statistics at the optimum: residuals r and J = dr/d(theta).
+    Eigen::VectorXd r(static_cast<Eigen::Index>(m_total));
+    Eigen::MatrixXd jacobian(static_cast<Eigen::Index>(m_total), static_cast<Eigen::Index>(p));
+    double weight_sum = 0.0;
+    Eigen::Index row = 0;
+    for (std::size_t d = 0; d < models.size(); ++d) {
+      const FitData& data = problem.data[d];
+      // Ceres' last Jacobian is usually at the optimum already (sensitivities come with every run).
+      const ModelEvaluation* kept = costs[d]->evaluated_at(theta);
+      const ModelEvaluation e = kept ? *kept : [&] {
+        try {
+          return models[d]->evaluate(theta, true);
+        } catch (const Interrupted& stop) {
+          throw interrupted_fit(stop.signal());
+        }
+      }();
+      if (!kept) forward_runs += e.forward_runs;
+      const double factor = costs[d]->factor();
+      DataSetFit out;
+      out.model = e.values;
+      double sum2 = 0.0, largest = 0.0;
+      for (std::size_t i = 0; i < data.values.size(); ++i, ++row) {
+        const double diff = e.values[i] - data.values[i];
+        sum2 += diff * diff;
+        largest = std::max(largest, std::abs(data.values[i]));
+        r[row] = factor * diff;
+        for (std::size_t j = 0; j < p; ++j) jacobian(row, static_cast<Eigen::Index>(j)) = factor * e.jacobian[i][j];
+      }
+      out.rms_residual = std::sqrt(sum2 / static_cast<double>(data.values.size()));
+      out.rms_relative = out.rms_residual / largest;
+      out.gradients = models[d]->uses_sensitivities() ? "forward sensitivities"
+                                                       : "finite differences (" + models[d]->finite_difference_reason() + ")";
+      out.fitted_case = models[d]->fitted_case(theta);
+      out.contact_half_width_planned = models[d]->planned_contact_half_width();
+      result.data.push_back(std::move(out));
+      weight_sum += data.weight * data.weight;
+    }
+    result.values = theta;
+    result.cost = 0.5 * r.squaredNorm();
+    result.rms_relative = std::sqrt(r.squaredNorm() / weight_sum);
+
+    // Relative sensitivities J diag(theta): what a 100% change of each combination does.
+    Eigen::MatrixXd relative = jacobian;
+    for (std::size_t j = 0; j < p; ++j) relative.col(static_cast<Eigen::Index>(j)) *= theta[j];
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(relative, Eigen::ComputeThinU | Eigen::ComputeThinV);
+    const Eigen::VectorXd sigma = svd.singularValues();
+    const Eigen::MatrixXd v = svd.matrixV();
+    for (Eigen::Index k = 0; k < sigma.size(); ++k) result.singular_values.push_back(sigma[k]);
+    const double smallest = sigma[sigma.size() - 1];
+    result.condition_number = smallest > 0.0 ? sigma[0] / smallest : std::numeric_limits<double>::infinity();
+
+    // Covariance s2 (J^T J)^-1, through the SVD: cov(ln theta) = s2 V S^-2 V^T.
+    const double dof = static_cast<double>(m_total) - static_cast<double>(p);
+    const double s2 = dof > 0.0 ? r.squaredNorm() / dof : std::numeric_limits<double>::quiet_NaN();
+    fisher_jacobian = jacobian;
+    fisher_s2 = s2;
+    const Eigen::Index pp = static_cast<Eigen::Index>(p);
+    Eigen::MatrixXd cov_log = Eigen::MatrixXd::Zero(pp, pp);
+    for (Eigen::Index k = 0; k < sigma.size(); ++k) {
+      const double inv2 = sigma[k] > 1e-14 * sigma[0] ? 1.0 / (sigma[k] * sigma[k]) : std::numeric_limits<double>::infinity();
+      cov_log += s2 * inv2 * v.col(k) * v.col(k).transpose();
+    }
+    result.covariance = cov_log;
+    for (Eigen::Index a = 0; a < pp; ++a)
+      for (Eigen::Index b = 0; b < pp; ++b) result.covariance(a, b) *= theta[static_cast<std::size_t>(a)] * theta[static_cast<std::size_t>(b)];
+    result.correlation = Eigen::MatrixXd::Identity(pp, pp);
+    for (Eigen::Index a = 0; a < pp; ++a) {
+      result.std_errors.push_back(std::sqrt(result.covariance(a, a)));
+      for (Eigen::Index b = 0; b < pp; ++b)
+        if (a != b) result.correlation(a, b) = result.covariance(a, b) / std::sqrt(result.covariance(a, a) * result.covariance(b, b));
+    }
+
+    // The model's own discretization error at the optimum: each data set again at half its contact
+    // nodes on the same planned contact width and element (error_estimate.hpp's companion, at the
+    // fitted parameters), Richardson's estimate e = P - P* at every data point.  The data are
+    // nature's (or a finer model's), so the fit's optimum is shifted by what e does along the
+    // sensitivities: theta_fit - theta_true = -(J^T J)^+ J^T e.
+    Eigen::VectorXd model_error = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(m_total));
+    result.model_error_estimated = true;
+    row = 0;
+    for (std::size_t d = 0; d < models.size(); ++d) {
+      const std::size_t n = problem.data[d].values.size();
+      const LoadCase fine_case = models[d]->case_at(theta);
+      const int half_nodes = fine_case.mesh.contact_nodes / 2;
+      if (half_nodes < 2) {
+        result.model_error_estimated = false;
+        row += static_cast<Eigen::Index>(n);
+        continue;
+      }
+      FitData half = problem.data[d];
+      half.load_case.mesh.contact_nodes = half_nodes;
+      half.load_case.mesh.contact_half_width = models[d]->planned_contact_half_width();
+      half.load_case.mesh.element = fine_case.mesh.element;
       try {
-        return models[d]->evaluate(theta, true);
+        const ForwardModel half_model(std::move(half), parameters, bounds, true, theta);
+        const ModelEvaluation e = half_model.evaluate(theta, false);
+        coarse_runs += e.forward_runs;
+        const double ratio = static_cast<double>(fine_case.mesh.contact_nodes) / half_nodes;
+        const double order = force_order_assumed(fine_case);
+        for (std::size_t i = 0; i < n; ++i, ++row) {
+          const double fine_value = result.data[d].model[i];
+          model_error[row] = costs[d]->factor() * (fine_value - richardson(fine_value, e.values[i], ratio, order).extrapolated);
+        }
+      } catch (const SolverError&) {
+        result.model_error_estimated = false;  // the companion failed: the noise alone is reported
+        row = 0;
+        for (std::size_t k = 0; k <= d; ++k) row += static_cast<Eigen::Index>(problem.data[k].values.size());
       } catch (const Interrupted& stop) {
         throw interrupted_fit(stop.signal());
       }
-    }();
-    if (!kept) forward_runs += e.forward_runs;
-    const double factor = costs[d]->factor();
-    DataSetFit out;
-    out.model = e.values;
-    double sum2 = 0.0, largest = 0.0;
-    for (std::size_t i = 0; i < data.values.size(); ++i, ++row) {
-      const double diff = e.values[i] - data.values[i];
-      sum2 += diff * diff;
-      largest = std::max(largest, std::abs(data.values[i]));
-      r[row] = factor * diff;
-      for (std::size_t j = 0; j < p; ++j) jacobian(row, static_cast<Eigen::Index>(j)) = factor * e.jacobian[i][j];
     }
-    out.rms_residual = std::sqrt(sum2 / static_cast<double>(data.values.size()));
-    out.rms_relative = out.rms_residual / largest;
-    out.gradients = models[d]->uses_sensitivities() ? "forward sensitivities"
-                                                     : "finite differences (" + models[d]->finite_difference_reason() + ")";
-    out.fitted_case = models[d]->fitted_case(theta);
-    out.contact_half_width_planned = models[d]->planned_contact_half_width();
-    result.data.push_back(std::move(out));
-    weight_sum += data.weight * data.weight;
-  }
-  result.values = theta;
-  result.cost = 0.5 * r.squaredNorm();
-  result.rms_relative = std::sqrt(r.squaredNorm() / weight_sum);
-
-  // Relative sensitivities J diag(theta): what a 100% change of each combination does.
-  Eigen::MatrixXd relative = jacobian;
-  for (std::size_t j = 0; j < p; ++j) relative.col(static_cast<Eigen::Index>(j)) *= theta[j];
-  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(relative, Eigen::ComputeThinV);
-  const Eigen::VectorXd sigma = svd.singularValues();
-  const Eigen::MatrixXd v = svd.matrixV();
-  for (Eigen::Index k = 0; k < sigma.size(); ++k) result.singular_values.push_back(sigma[k]);
-  const double smallest = sigma[sigma.size() - 1];
-  result.condition_number = smallest > 0.0 ? sigma[0] / smallest : std::numeric_limits<double>::infinity();
-  const bool well_conditioned = result.condition_number <= identifiability_condition_limit;
-
-  // Covariance s2 (J^T J)^-1, through the SVD: cov(ln theta) = s2 V S^-2 V^T.
-  const double dof = static_cast<double>(m_total) - static_cast<double>(p);
-  const double s2 = dof > 0.0 ? r.squaredNorm() / dof : std::numeric_limits<double>::quiet_NaN();
-  const Eigen::Index pp = static_cast<Eigen::Index>(p);
-  Eigen::MatrixXd cov_log = Eigen::MatrixXd::Zero(pp, pp);
-  for (Eigen::Index k = 0; k < sigma.size(); ++k) {
-    const double inv2 = sigma[k] > 1e-14 * sigma[0] ? 1.0 / (sigma[k] * sigma[k]) : std::numeric_limits<double>::infinity();
-    cov_log += s2 * inv2 * v.col(k) * v.col(k).transpose();
-  }
-  result.covariance = cov_log;
-  for (Eigen::Index a = 0; a < pp; ++a)
-    for (Eigen::Index b = 0; b < pp; ++b) result.covariance(a, b) *= theta[static_cast<std::size_t>(a)] * theta[static_cast<std::size_t>(b)];
-  result.correlation = Eigen::MatrixXd::Identity(pp, pp);
-  for (Eigen::Index a = 0; a < pp; ++a) {
-    result.std_errors.push_back(std::sqrt(result.covariance(a, a)));
-    for (Eigen::Index b = 0; b < pp; ++b)
-      if (a != b) result.correlation(a, b) = result.covariance(a, b) / std::sqrt(result.covariance(a, a) * result.covariance(b, b));
-  }
-
-  // The weakest combination, in words: scaled so that its largest component is 1%.
-  const Eigen::VectorXd weak = v.col(pp - 1);
-  for (Eigen::Index j = 0; j < pp; ++j) result.weakest_direction.push_back(weak[j]);
-  if (!well_conditioned && p > 1) {
-    const Eigen::Index lead = [&] {
-      Eigen::Index k = 0;
-      weak.cwiseAbs().maxCoeff(&k);
-      return k;
-    }();
-    const Eigen::VectorXd step = 0.01 * weak / weak[lead];
-    std::string parts;
-    for (Eigen::Index j = 0; j < pp; ++j) {
-      if (j == lead || std::abs(step[j]) < 1e-4) continue;
-      parts += fmt::format("{} {} {} by {}", parts.empty() ? "while" : " and", step[j] > 0 ? "raising" : "lowering",
-                           key_of(problem.free[static_cast<std::size_t>(j)].parameter), percent(std::abs(step[j])));
+    if (!result.model_error_estimated) model_error.setZero();
+    // -(J^T J)^+ J^T e in ln theta, through the SVD of J diag(theta): -V S^-1 U^T e.
+    Eigen::VectorXd shift_log = Eigen::VectorXd::Zero(pp);
+    {
+      const Eigen::MatrixXd u = svd.matrixU();
+      for (Eigen::Index k = 0; k < sigma.size(); ++k)
+        if (sigma[k] > 1e-14 * sigma[0]) shift_log -= (u.col(k).dot(model_error) / sigma[k]) * v.col(k);
     }
-    std::string names = key_of(problem.free[static_cast<std::size_t>(lead)].parameter);
-    for (Eigen::Index j = 0; j < pp; ++j)
-      if (j != lead && std::abs(step[j]) >= 1e-4) names += " and " + key_of(problem.free[static_cast<std::size_t>(j)].parameter);
-    result.poorly_determined = fmt::format(
-        "{} trade off: raising {} by 1% {} changes the fit to the data by only {} (weighted rms, relative to each data "
-        "set's largest value); condition number {:.3g} > {:g}",
-        names, key_of(problem.free[static_cast<std::size_t>(lead)].parameter), parts.empty() ? "alone" : parts,
-        percent((relative * step).norm() / std::sqrt(weight_sum)), result.condition_number,
-        identifiability_condition_limit);
+
+    // Per parameter: the 95% interval of noise and model together, and the verdict.
+    const double t = student_t975(dof);
+    all_determined = true;
+    for (std::size_t j = 0; j < p; ++j) {
+      const FreeParameter& f = problem.free[j];
+      ParameterDetermination pd;
+      pd.model_shift = shift_log[static_cast<Eigen::Index>(j)] * theta[j];
+      pd.total_std_error = std::hypot(result.std_errors[j], pd.model_shift);
+      pd.lower = theta[j] - t * pd.total_std_error;
+      pd.upper = theta[j] + t * pd.total_std_error;
+      pd.relative_half_width = theta[j] != 0.0 ? t * pd.total_std_error / std::abs(theta[j])
+                                               : std::numeric_limits<double>::infinity();
+      const bool inside = pd.lower >= f.lower && pd.upper <= f.upper;
+      pd.determined = std::isfinite(pd.relative_half_width) && pd.relative_half_width <= determination_limit && inside;
+      if (pd.determined) {
+        pd.verdict = fmt::format("determined to +-{} (95%)", percent(pd.relative_half_width));
+      } else {
+        std::string reach;
+        if (pd.lower < f.lower) reach += fmt::format(", below the lower bound {:g}", f.lower);
+        if (pd.upper > f.upper) reach += fmt::format("{} above the upper bound {:g}", reach.empty() ? "," : " and", f.upper);
+        const bool model_limited = std::abs(pd.model_shift) > result.std_errors[j];
+        pd.verdict = fmt::format("not determined {}: the 95% interval is [{:.4g}, {:.4g}] (+-{}){}",
+                                 model_limited ? "at this forward mesh" : "by this data", pd.lower, pd.upper,
+                                 percent(pd.relative_half_width), reach);
+        // The parameter it trades against: the strongest correlation.
+        std::size_t partner = j;
+        for (std::size_t k = 0; k < p; ++k)
+          if (k != j && (partner == j || std::abs(result.correlation(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(k))) >
+                                             std::abs(result.correlation(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(partner)))))
+            partner = k;
+        if (partner != j) {
+          const double c = result.correlation(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(partner));
+          if (std::abs(c) >= 0.5)
+            pd.verdict += fmt::format("; it trades against {} (correlation {:.3f})", key_of(problem.free[partner].parameter), c);
+        }
+        if (model_limited)
+          pd.verdict += "; the forward model's own discretization error is most of it (a finer mesh.contact_nodes narrows it)";
+      }
+      all_determined = all_determined && pd.determined;
+      result.model_to_noise = std::max(result.model_to_noise, result.std_errors[j] > 0.0
+                                                                  ? std::abs(pd.model_shift) / result.std_errors[j]
+                                                                  : 0.0);
+      result.determination.push_back(std::move(pd));
+    }
+
+    // The weakest combination, in words: scaled so that its largest component is 1%.
+    const Eigen::VectorXd weak = v.col(pp - 1);
+    for (Eigen::Index j = 0; j < pp; ++j) result.weakest_direction.push_back(weak[j]);
+    if (!all_determined && p > 1) {
+      const Eigen::Index lead = [&] {
+        Eigen::Index k = 0;
+        weak.cwiseAbs().maxCoeff(&k);
+        return k;
+      }();
+      const Eigen::VectorXd step = 0.01 * weak / weak[lead];
+      std::string parts;
+      for (Eigen::Index j = 0; j < pp; ++j) {
+        if (j == lead || std::abs(step[j]) < 1e-4) continue;
+        parts += fmt::format("{} {} {} by {}", parts.empty() ? "while" : " and", step[j] > 0 ? "raising" : "lowering",
+                             key_of(problem.free[static_cast<std::size_t>(j)].parameter), percent(std::abs(step[j])));
+      }
+      std::string names = key_of(problem.free[static_cast<std::size_t>(lead)].parameter);
+      for (Eigen::Index j = 0; j < pp; ++j)
+        if (j != lead && std::abs(step[j]) >= 1e-4) names += " and " + key_of(problem.free[static_cast<std::size_t>(j)].parameter);
+      result.poorly_determined = fmt::format(
+          "{} trade off: raising {} by 1% {} changes the fit to the data by only {} (weighted rms, relative to each data "
+          "set's largest value); condition number {:.3g}",
+          names, key_of(problem.free[static_cast<std::size_t>(lead)].parameter), parts.empty() ? "alone" : parts,
+          percent((relative * step).norm() / std::sqrt(weight_sum)), result.condition_number);
+    }
+
+  };
+  assess(*fine, theta);
+
+  // The model's error beyond the noise's: the forward meshes refined (twice the contact nodes,
+  // planned at the optimum) and the optimum polished there, up to settings.mesh_refinements times.
+  while (result.model_to_noise > 1.0 && result.mesh_refinements < problem.settings.mesh_refinements) {
+    const double factor = std::pow(2.0, result.mesh_refinements + 1);
+    Level refined = make_level(factor, theta, forward_runs);
+    StartOutcome polished =
+        solve_from(refined, "refined", theta, result.mesh_refinements + 1, starts, problem.settings.max_iterations);
+    stop_if_interrupted();
+    const bool usable = std::isfinite(polished.cost);
+    result.starts.push_back(std::move(polished));
+    if (!usable) break;  // the refined meshes found nothing: the last level's answer stands
+    ++result.mesh_refinements;
+    theta = result.starts.back().result;
+    result.selected_start = result.starts.size() - 1;
+    fine = std::move(refined);
+    assess(*fine, theta);
   }
+  // Other starts that ended elsewhere at a cost the data cannot tell from the best's (a
+  // likelihood-ratio test at 95% on their own meshes: 2 (cost - best) / s2 below chi2(p)) belong to
+  // the answer: a flat valley, or a second minimum.  Each parameter's interval is widened to hold
+  // them, and a warning names them.
+  {
+    const double chi2_95[] = {3.841, 5.991, 7.815, 9.488, 11.07, 12.59};
+    const double chi2 = chi2_95[std::min<std::size_t>(p, 6) - 1];
+    const double dof_points = static_cast<double>(m_total) - static_cast<double>(p);
+    std::vector<std::string> others;
+    for (const std::string phase : {"coarse", "fine"}) {
+      const std::size_t best = best_start(result.starts, phase);
+      if (best == result.starts.size() || !(dof_points > 0.0)) continue;
+      const StartOutcome& b = result.starts[best];
+      const double s2 = 2.0 * b.cost / dof_points;
+      for (const StartOutcome& o : result.starts) {
+        if (&o == &b || o.phase != b.phase || !std::isfinite(o.cost)) continue;
+        if (!(2.0 * (o.cost - b.cost) <= chi2 * s2)) continue;
+        // Elsewhere: outside the best's own 95% interval in some parameter (on its own meshes the
+        // same offset; the offset is what matters).
+        bool elsewhere = false;
+        for (std::size_t j = 0; j < p; ++j) {
+          const ParameterDetermination& pd = result.determination[j];
+          if (std::abs(o.result[j] - b.result[j]) > (pd.upper - pd.lower) / 2.0) elsewhere = true;
+        }
+        if (!elsewhere) continue;
+        std::string values;
+        for (std::size_t j = 0; j < p; ++j) {
+          // The other end, moved by the offset between the two phases' optima.
+          const double other = theta[j] + (o.result[j] - b.result[j]);
+          ParameterDetermination& pd = result.determination[j];
+          if (other < pd.lower || other > pd.upper) {
+            pd.lower = std::max(problem.free[j].lower, std::min(pd.lower, other));
+            pd.upper = std::min(problem.free[j].upper, std::max(pd.upper, other));
+            if (!pd.determined)
+              pd.verdict += fmt::format("; distinct starts end within noise of the best cost across [{:.4g}, {:.4g}]",
+                                        pd.lower, pd.upper);
+          }
+          values += fmt::format("{}{} = {:.4g}", values.empty() ? "" : ", ", key_of(problem.free[j].parameter), o.result[j]);
+        }
+        others.push_back(fmt::format("{} (cost {:.4g} against {:.4g}, on the {} meshes)", values, o.cost, b.cost, phase));
+      }
+    }
+    if (!others.empty()) {
+      all_determined = true;
+      for (std::size_t j = 0; j < p; ++j) {
+        ParameterDetermination& pd = result.determination[j];
+        const double half = (pd.upper - pd.lower) / 2.0;
+        pd.relative_half_width = std::max(pd.relative_half_width, theta[j] != 0.0 ? half / std::abs(theta[j]) : half);
+        if (pd.determined && pd.relative_half_width > determination_limit) {
+          pd.determined = false;
+          pd.verdict = fmt::format("not determined by this data: distinct starts end within noise of the best cost "
+                                   "across [{:.4g}, {:.4g}]",
+                                   pd.lower, pd.upper);
+        }
+        all_determined = all_determined && pd.determined;
+      }
+      std::string list;
+      for (const auto& o : others) list += "; " + o;
+      warn(fmt::format("distinct starts ended at distinct points of a cost the data cannot tell from the best's{}: the "
+                       "valley between them is part of the answer (the intervals are widened to hold it)",
+                       list));
+    }
+  }
+
+  if (result.model_to_noise > 1.0) {
+    int nodes = 0;
+    for (const auto& m : fine->models) nodes = std::max(nodes, m->case_at(theta).mesh.contact_nodes);
+    warn(fmt::format("the forward model's own discretization error moves the fitted parameters by up to {:.2g} times "
+                     "their noise's standard error after {} refinement(s) of the forward meshes (now {} contact "
+                     "nodes; fit.mesh_refinements allows {}): the intervals include it",
+                     result.model_to_noise, result.mesh_refinements, nodes, problem.settings.mesh_refinements));
+  }
+
+  // The experiment that would determine what this data does not: candidate additions to the
+  // data, each evaluated once with its sensitivities at the optimum, and the noise-only interval
+  // of the data and the addition together, s2 (J^T J + Ja^T Ja)^-1 (the addition's rows scaled
+  // as a data set's, 20 points, with the data's relative noise).  Fisher's information adds.
+  const auto design_experiments = [&](const std::vector<std::unique_ptr<ForwardModel>>& models, bool additions) {
+    const double dof = static_cast<double>(m_total) - static_cast<double>(p);
+    if (!(fisher_s2 > 0.0) || !(dof > 0.0)) return;
+    const double t_now = student_t975(dof);
+    // In ln theta (J diag(theta)): the parameters' scales differ by 1e9 (sigma_y against n), which
+    // a rank-revealing inverse would read as a rank deficiency.
+    Eigen::MatrixXd relative_jacobian = fisher_jacobian;
+    for (std::size_t j = 0; j < p; ++j) relative_jacobian.col(static_cast<Eigen::Index>(j)) *= theta[j];
+    const Eigen::MatrixXd information = relative_jacobian.transpose() * relative_jacobian;
+    const Eigen::MatrixXd today = information.completeOrthogonalDecomposition().pseudoInverse();
+    for (std::size_t j = 0; j < p; ++j) {
+      const double var = fisher_s2 * today(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(j));
+      result.noise_relative_half_width.push_back(t_now * std::sqrt(std::max(var, 0.0)));
+    }
+    if (!additions) return;
+    // The reference data set: the first force-depth curve.
+    std::size_t base = problem.data.size();
+    for (std::size_t d = 0; d < problem.data.size(); ++d)
+      if (problem.data[d].kind == FitDataKind::force_depth_curve) {
+        base = d;
+        break;
+      }
+    if (base == problem.data.size()) return;
+    const FitData& data = problem.data[base];
+    const double deepest = *std::max_element(data.abscissa.begin(), data.abscissa.end());
+    bool unloads = false, has_imprint = false;
+    double reached = 0.0;
+    for (double a : data.abscissa) {
+      unloads = unloads || a < reached * (1.0 - 1e-9);
+      reached = std::max(reached, a);
+    }
+    std::set<PunchShapeKind> shapes;
+    for (const FitData& d : problem.data) {
+      has_imprint = has_imprint || d.kind == FitDataKind::imprint_profile;
+      shapes.insert(d.load_case.punch.shape);
+    }
+    LoadCase at = data.load_case;
+    for (std::size_t j = 0; j < p; ++j) set_value(at.material, parameters[j], theta[j]);
+    const int points = 20;
+    const auto spaced = [&](double from, double to, int n) {
+      std::vector<double> x;
+      for (int k = 0; k < n; ++k) x.push_back(from + (to - from) * (n == 1 ? 1.0 : static_cast<double>(k) / (n - 1)));
+      return x;
+    };
+    const auto loading = [&](double depth) { return spaced(depth / points, depth, points); };
+    struct Candidate {
+      CandidateExperiment report;
+      FitData data;
+    };
+    std::vector<Candidate> candidates;
+    const auto add = [&](std::string name, std::string description, LoadCase lc, FitDataKind kind,
+                         std::vector<double> abscissa, bool replan) {
+      Candidate c;
+      c.report.name = std::move(name);
+      c.report.description = std::move(description);
+      if (replan) lc.mesh.contact_half_width.reset();
+      c.data.kind = kind;
+      c.data.file = c.report.name;
+      c.data.load_case = std::move(lc);
+      c.data.abscissa = std::move(abscissa);
+      c.data.values.assign(c.data.abscissa.size(), 0.0);
+      candidates.push_back(std::move(c));
+    };
+    const double step = at.max_depth() / std::max(1, at.load.total_increments());
+    const auto with_path = [&](LoadCase lc, std::vector<double> path) {
+      double length = 0.0;
+      for (std::size_t k = 1; k < path.size(); ++k) length += std::abs(path[k] - path[k - 1]);
+      lc.load.path = std::move(path);
+      lc.load.segment_increments.clear();
+      lc.load.increments = std::max(1, static_cast<int>(std::ceil(length / step - 1e-9)));
+      return lc;
+    };
+    if (!unloads)
+      add("unloading branch", fmt::format("unloading from the deepest depth {:.3g} m to {:.3g} m, {} points", deepest,
+                                          0.9 * deepest, points),
+          with_path(at, {0.0, deepest, 0.9 * deepest}), FitDataKind::force_depth_curve,
+          spaced(deepest, 0.9 * deepest, points), false);
+    add("deeper indent", fmt::format("the same indenter to {:.3g} m (twice as deep), {} points", 2.0 * deepest, points),
+        with_path(at, {0.0, 2.0 * deepest}), FitDataKind::force_depth_curve, loading(2.0 * deepest), true);
+    if (!shapes.count(PunchShapeKind::sphere)) {
+      LoadCase sphere = with_path(at, {0.0, deepest});
+      sphere.punch = PunchInput{};
+      sphere.punch.shape = PunchShapeKind::sphere;
+      sphere.punch.radius = 20.0 * deepest;  // the depth 5% of the radius: small strain's range
+      add("sphere", fmt::format("a sphere of radius {:.3g} m to {:.3g} m, {} points", sphere.punch.radius, deepest, points),
+          sphere, FitDataKind::force_depth_curve, loading(deepest), true);
+    }
+    if (!shapes.count(PunchShapeKind::cone)) {
+      LoadCase cone = with_path(at, {0.0, deepest});
+      cone.punch = PunchInput{};
+      cone.punch.shape = PunchShapeKind::cone;
+      cone.punch.half_angle = 70.3;  // the Berkovich pyramid's equivalent cone
+      add("cone", fmt::format("a 70.3 degree cone (Berkovich's equivalent) to {:.3g} m, {} points", deepest, points), cone,
+          FitDataKind::force_depth_curve, loading(deepest), true);
+    } else {
+      LoadCase sharp = with_path(at, {0.0, deepest});
+      sharp.punch = PunchInput{};
+      sharp.punch.shape = PunchShapeKind::cone;
+      sharp.punch.half_angle = 42.3;  // the cube corner's equivalent cone
+      add("sharper cone", fmt::format("a 42.3 degree cone (the cube corner's equivalent) to {:.3g} m, {} points", deepest,
+                                      points),
+          sharp, FitDataKind::force_depth_curve, loading(deepest), true);
+    }
+    if (!has_imprint) {
+      const double a = models[base]->planned_contact_half_width();
+      std::vector<double> radii = spaced(0.0, std::min(2.0 * a, 0.9 * at.geometry.lx), 12);
+      add("imprint profile",
+          fmt::format("the residual imprint after unloading from {:.3g} m to 0, 12 radii to {:.3g} m", deepest, radii.back()),
+          with_path(at, {0.0, deepest, 0.0}), FitDataKind::imprint_profile, radii, false);
+    }
+    for (Candidate& c : candidates) {
+      try {
+        const ForwardModel model(c.data, parameters, bounds, problem.settings.finite_differences, theta);
+        const ModelEvaluation e = model.evaluate(theta, true);
+        forward_runs += e.forward_runs;
+        double peak = 0.0;
+        for (double v : e.values) peak = std::max(peak, std::abs(v));
+        if (!(peak > 0.0)) throw SolverError("the addition measures nothing at the fitted parameters");
+        const double factor = 1.0 / (peak * std::sqrt(static_cast<double>(e.values.size())));
+        Eigen::MatrixXd added(static_cast<Eigen::Index>(e.values.size()), static_cast<Eigen::Index>(p));
+        for (std::size_t i = 0; i < e.values.size(); ++i)
+          for (std::size_t j = 0; j < p; ++j)
+            added(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = factor * e.jacobian[i][j] * theta[j];
+        const Eigen::MatrixXd inverse =
+            (information + added.transpose() * added).completeOrthogonalDecomposition().pseudoInverse();
+        const double t_then = student_t975(dof + static_cast<double>(e.values.size()));
+        for (std::size_t j = 0; j < p; ++j) {
+          const double var = fisher_s2 * inverse(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(j));
+          const double predicted = t_then * std::sqrt(std::max(var, 0.0));
+          c.report.relative_half_width.push_back(predicted);
+          c.report.shrink.push_back(predicted > 0.0 ? result.noise_relative_half_width[j] / predicted
+                                                    : std::numeric_limits<double>::infinity());
+        }
+      } catch (const Interrupted& stop) {
+        throw interrupted_fit(stop.signal());
+      } catch (const std::exception& failure) {  // a candidate the scene cannot make: said, not fatal
+        c.report.failure = failure.what();
+      }
+      result.experiment_design.push_back(std::move(c.report));
+    }
+  };
 
   // The verdict: a misfit beyond poor_fit_rms_limit, or a parameter at a bound, is a poor fit.
   for (std::size_t d = 0; d < result.data.size(); ++d) {
@@ -677,7 +1096,8 @@ FitResult fit(const FitProblem& problem) {
     for (std::size_t k = 0; k < result.quality_problems.size(); ++k)
       result.quality += (k == 0 ? ": " : "; ") + result.quality_problems[k];
   }
-  result.identifiable = well_conditioned && result.good();
+  result.identifiable = all_determined && result.good();
+  design_experiments(fine->models, problem.settings.design_experiments && result.good());
   result.failed_runs = failures.runs;
   result.refused_evaluations = failures.refused;
   result.forward_runs = forward_runs;

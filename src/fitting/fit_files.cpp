@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <limits>
+#include <optional>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -11,6 +13,7 @@
 #include "indentsim/input/csv_table.hpp"
 #include "indentsim/base/error.hpp"
 #include "indentsim/base/file_system.hpp"
+#include "indentsim/output/checkpoint.hpp"
 
 namespace indentsim {
 
@@ -187,9 +190,10 @@ FitJob read_fit_job(const FitCommandLine& cl) {
     if (!fit) throw InputError(cl.input, "fit", "a fit file needs a [fit] table (free = [...])");
     for (const auto& [k, v] : *fit) {
       const std::string key(k.str());
-      if (key != "free" && key != "bounds" && key != "starts" && key != "out" && key != "single_level")
+      if (key != "free" && key != "bounds" && key != "starts" && key != "out" && key != "single_level" &&
+          key != "mesh_refinements")
         throw InputError(cl.input, "fit." + printable(key, 40),
-                         "is not a fit key (free, bounds, starts, out, single_level)");
+                         "is not a fit key (free, bounds, starts, out, single_level, mesh_refinements)");
     }
     if (const auto* list = (*fit)["free"].as_array()) {
       for (const auto& item : *list) {
@@ -212,6 +216,11 @@ FitJob read_fit_job(const FitCommandLine& cl) {
       const auto s = node->value_exact<int64_t>();
       if (!s) throw InputError(cl.input, "fit.starts", "must be an integer");
       problem.settings.starts = static_cast<int>(std::clamp<int64_t>(*s, -1, 1000));
+    }
+    if (const auto* node = (*fit)["mesh_refinements"].node()) {
+      const auto s = node->value_exact<int64_t>();
+      if (!s) throw InputError(cl.input, "fit.mesh_refinements", "must be an integer");
+      problem.settings.mesh_refinements = static_cast<int>(std::clamp<int64_t>(*s, -1, 1000));
     }
     if (const auto* node = (*fit)["out"].node()) {
       const auto o = node->value_exact<std::string>();
@@ -277,10 +286,15 @@ FitJob read_fit_job(const FitCommandLine& cl) {
   if (cl.starts) problem.settings.starts = *cl.starts;
   if (problem.settings.starts < 1 || problem.settings.starts > 100)
     throw InputError(cl.starts ? "--starts" : cl.input, "starts", "must be between 1 and 100");
+  if (cl.mesh_refinements) problem.settings.mesh_refinements = *cl.mesh_refinements;
+  if (problem.settings.mesh_refinements < 0 || problem.settings.mesh_refinements > 4)
+    throw InputError(cl.mesh_refinements ? "--mesh-refinements" : cl.input, "mesh_refinements",
+                     "must be between 0 and 4 (each doubles the forward meshes' contact nodes)");
   if (!cl.out.empty()) job.out_dir = cl.out;
   if (job.out_dir.empty()) job.out_dir = "out/fit";
   problem.settings.finite_differences = cl.finite_differences;
   if (cl.single_level) problem.settings.coarse_first = false;
+  if (cl.no_design) problem.settings.design_experiments = false;
 
   if (free.empty()) throw InputError(cl.input, "--free", "name the parameters to fit, e.g. --free material.yield_stress,material.n");
   for (const auto& key : free) {
@@ -332,8 +346,15 @@ nlohmann::json fit_json(const FitProblem& problem, const FitResult& r) {
   for (std::size_t k = 0; k < problem.free.size(); ++k) {
     const auto& f = problem.free[k];
     order.push_back(key_of(f.parameter));
+    const ParameterDetermination& pd = r.determination[k];
     parameters[key_of(f.parameter)] = {{"value", r.values[k]},
                                        {"std_error", number(r.std_errors[k])},
+                                       {"model_shift", number(pd.model_shift)},
+                                       {"std_error_total", number(pd.total_std_error)},
+                                       {"interval_95", {number(pd.lower), number(pd.upper)}},
+                                       {"relative_half_width_95", number(pd.relative_half_width)},
+                                       {"determined", pd.determined},
+                                       {"verdict", pd.verdict},
                                        {"lower", f.lower},
                                        {"upper", f.upper},
                                        {"start", value_of(problem.data.front().load_case.material, f.parameter)}};
@@ -354,8 +375,10 @@ nlohmann::json fit_json(const FitProblem& problem, const FitResult& r) {
   j["covariance"] = covariance;
   j["singular_values"] = r.singular_values;
   j["condition_number"] = number(r.condition_number);
-  j["condition_limit"] = identifiability_condition_limit;
   j["identifiable"] = r.identifiable;
+  j["determination_limit"] = determination_limit;
+  j["model_error_estimated"] = r.model_error_estimated;
+  j["model_shift_over_noise"] = number(r.model_to_noise);
   j["weakest_direction"] = r.weakest_direction;
   j["poorly_determined"] = r.poorly_determined.empty() ? json(nullptr) : json(r.poorly_determined);
   j["rms_residual"] = {{"relative", r.rms_relative}};
@@ -397,6 +420,22 @@ nlohmann::json fit_json(const FitProblem& problem, const FitResult& r) {
                       {"selected", k == r.selected_start}});
   }
   j["starts"] = starts;
+  // The experiment that would determine what the data do not: per candidate addition, each
+  // parameter's predicted noise-only 95% half-width (relative) and how much narrower that is.
+  json design = json::array();
+  for (const CandidateExperiment& c : r.experiment_design) {
+    json per = json::object();
+    for (std::size_t k = 0; k < c.relative_half_width.size(); ++k)
+      per[order[k]] = {{"relative_half_width_95_noise", number(c.relative_half_width[k])},
+                       {"narrower_by", number(c.shrink[k])}};
+    design.push_back({{"addition", c.name},
+                      {"what", c.description},
+                      {"parameters", per},
+                      {"failure", c.failure.empty() ? json(nullptr) : json(c.failure)}});
+  }
+  json today = json::object();
+  for (std::size_t k = 0; k < r.noise_relative_half_width.size(); ++k) today[order[k]] = number(r.noise_relative_half_width[k]);
+  j["experiment_design"] = {{"today_relative_half_width_95_noise", today}, {"additions", design}};
   return j;
 }
 
@@ -419,6 +458,114 @@ void write_fit_results(const std::filesystem::path& dir, const FitProblem& probl
   for (std::size_t d = 0; d < result.data.size(); ++d)
     write_file_atomically(dir / (d == 0 ? std::string("fitted_case.toml") : fmt::format("fitted_case_{}.toml", d + 1)),
                           to_toml(result.data[d].fitted_case));
+}
+
+namespace {
+
+nlohmann::json outcome_json(const StartOutcome& o) {
+  using nlohmann::json;
+  return {{"phase", o.phase},           {"index", o.index},         {"start", o.start},
+          {"result", o.result},         {"cost", std::isfinite(o.cost) ? json(o.cost) : json(nullptr)},
+          {"iterations", o.iterations}, {"converged", o.converged}, {"message", o.message}};
+}
+
+StartOutcome outcome_of(const nlohmann::json& j) {
+  StartOutcome o;
+  o.phase = j.at("phase").get<std::string>();
+  o.index = j.at("index").get<int>();
+  o.start = j.at("start").get<std::vector<double>>();
+  o.result = j.at("result").get<std::vector<double>>();
+  o.cost = j.at("cost").is_null() ? std::numeric_limits<double>::infinity() : j.at("cost").get<double>();
+  o.iterations = j.at("iterations").get<int>();
+  o.converged = j.at("converged").get<bool>();
+  o.message = j.at("message").get<std::string>();
+  return o;
+}
+
+}  // namespace
+
+std::string fit_fingerprint(const FitProblem& problem) {
+  // Exact text of everything that steers the fit: doubles to 17 digits round-trip.
+  std::string text;
+  for (const FitData& d : problem.data) {
+    text += fmt::format("data {} {} {}\n", static_cast<int>(d.kind), d.weight, to_toml(d.load_case));
+    for (std::size_t i = 0; i < d.values.size(); ++i) text += fmt::format("{:.17g} {:.17g}\n", d.abscissa[i], d.values[i]);
+  }
+  for (const FreeParameter& f : problem.free) text += fmt::format("free {} {:.17g} {:.17g}\n", key_of(f.parameter), f.lower, f.upper);
+  const FitSettings& s = problem.settings;
+  text += fmt::format("settings {} {} {} {} {} {}\n", s.starts, s.max_iterations, s.finite_differences, s.coarse_first,
+                      s.replan_mesh, s.mesh_refinements);
+  return fmt::format("{:016x}", fnv1a(text.data(), text.size()));
+}
+
+void write_fit_checkpoint(const std::filesystem::path& dir, const FitProblem& problem, const FitCheckpoint& c) {
+  nlohmann::json j;
+  j["what"] = "indentsim fit checkpoint: continue with `indentsim fit ... --resume` (the same command)";
+  j["fingerprint"] = fit_fingerprint(problem);
+  nlohmann::json finished = nlohmann::json::array();
+  for (const StartOutcome& o : c.finished) finished.push_back(outcome_json(o));
+  j["finished"] = finished;
+  j["in_progress"] = c.has_in_progress ? outcome_json(c.in_progress) : nlohmann::json(nullptr);
+  j["forward_runs"] = c.forward_runs;
+  j["coarse_runs"] = c.coarse_runs;
+  j["iterations"] = c.iterations;
+  j["failed_runs"] = c.failed_runs;
+  j["refused_evaluations"] = c.refused_evaluations;
+  std::filesystem::create_directories(dir);
+  write_file_atomically(dir / fit_checkpoint_name, j.dump(1) + "\n");
+}
+
+FitCheckpoint read_fit_checkpoint(const std::filesystem::path& dir, const FitProblem& problem) {
+  const std::filesystem::path file = dir / fit_checkpoint_name;
+  std::ifstream in(file);
+  if (!in) throw InputError(file.string(), "--resume", "there is no fit checkpoint here to resume from (a fit that ended removed it)");
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(file.string(), "--resume", fmt::format("the checkpoint is damaged: {}", e.what()));
+  }
+  if (!j.is_object() || !j.contains("fingerprint") || !j["fingerprint"].is_string())
+    throw InputError(file.string(), "fingerprint", "the checkpoint is damaged: no fingerprint");
+  if (j["fingerprint"].get<std::string>() != fit_fingerprint(problem))
+    throw InputError(file.string(), "fingerprint",
+                     "the checkpoint is another fit's: the data, a load case, the free parameters, their bounds or "
+                     "the fit's settings differ from this command's");
+  FitCheckpoint c;
+  try {
+    for (const auto& o : j.at("finished")) c.finished.push_back(outcome_of(o));
+    if (!j.at("in_progress").is_null()) {
+      c.has_in_progress = true;
+      c.in_progress = outcome_of(j.at("in_progress"));
+    }
+    c.forward_runs = j.at("forward_runs").get<int>();
+    c.coarse_runs = j.at("coarse_runs").get<int>();
+    c.iterations = j.at("iterations").get<int>();
+    c.failed_runs = j.at("failed_runs").get<int>();
+    c.refused_evaluations = j.at("refused_evaluations").get<int>();
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(file.string(), "--resume", fmt::format("the checkpoint is damaged: {}", e.what()));
+  }
+  const std::size_t p = problem.free.size();
+  const auto sized = [&](const StartOutcome& o) { return o.start.size() == p && o.result.size() == p; };
+  if (!std::all_of(c.finished.begin(), c.finished.end(), sized) || (c.has_in_progress && !sized(c.in_progress)))
+    throw InputError(file.string(), "--resume", "the checkpoint is damaged: a start has the wrong number of parameters");
+  return c;
+}
+
+FitResult run_fit_job(FitJob& job, bool resume) {
+  const std::filesystem::path dir = job.out_dir;
+  std::optional<FitCheckpoint> restored;
+  if (resume) restored = read_fit_checkpoint(dir, job.problem);
+  job.problem.settings.resume_from = restored ? &*restored : nullptr;
+  const FitProblem& problem = job.problem;
+  job.problem.settings.on_checkpoint = [&dir, &problem](const FitCheckpoint& c) { write_fit_checkpoint(dir, problem, c); };
+  FitResult result = fit(job.problem);
+  job.problem.settings.resume_from = nullptr;
+  write_fit_results(dir, job.problem, result);
+  std::error_code ec;
+  std::filesystem::remove(dir / fit_checkpoint_name, ec);
+  return result;
 }
 
 }  // namespace indentsim

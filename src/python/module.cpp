@@ -168,8 +168,7 @@ std::string fit_curves(FitCommandLine command_line) {
   py::gil_scoped_release unlocked;
   const WorkInProgress working;
   FitJob job = read_fit_job(command_line);
-  const FitResult result = fit(job.problem);
-  write_fit_results(job.out_dir, job.problem, result);
+  const FitResult result = run_fit_job(job, command_line.resume);
   return fit_json(job.problem, result).dump(2) + "\n";
 }
 
@@ -319,6 +318,9 @@ PYBIND11_MODULE(_indentsim, m) {
       .def_readwrite("bounds", &FitCommandLine::bounds)
       .def_readwrite("overrides", &FitCommandLine::overrides)
       .def_readwrite("starts", &FitCommandLine::starts)
+      .def_readwrite("mesh_refinements", &FitCommandLine::mesh_refinements)
+      .def_readwrite("resume", &FitCommandLine::resume)
+      .def_readwrite("no_design", &FitCommandLine::no_design)
       .def_readwrite("out", &FitCommandLine::out)
       .def_readwrite("finite_differences", &FitCommandLine::finite_differences)
       .def_readwrite("single_level", &FitCommandLine::single_level)

@@ -8,19 +8,20 @@
 // |value| and w its weight, so every data set counts by its weight, not by its number of points.
 // Statistics at the optimum (the Jacobian J of r in theta):
 //  - covariance s2 (J^T J)^-1 with s2 = sum r^2 / (m - p), the residuals' own scatter: standard
-//    errors assume independent errors of equal size within a data set (noise, not a model error);
+//    errors of the noise, assuming independent errors of equal size within a data set;
+//  - the model's own discretization error, estimated at the optimum (each data set at half its
+//    contact nodes, Richardson) and carried along the sensitivities into a shift of each
+//    parameter; a 0.3% systematic difference moves a parameter along a flat valley by many
+//    standard errors of the noise, so the interval must hold it (ParameterDetermination);
+//  - per parameter a 95% interval of both, and a verdict from it: determined to +-x%, or not
+//    determined by this data, with the parameter it trades against;
 //  - the singular values of J diag(theta): how much the residuals move per relative change of
-//    each combination of parameters.  The strongest is of order one (P is nearly proportional to
-//    E or sigma_y); a condition number beyond identifiability_condition_limit = 100 means a 10%
-//    change of the weakest combination moves the curves by less than about 0.1% -- below the
-//    model's own discretization error at the default mesh -- so no data the model is compared
-//    with can pin it (measured: a sharp cone's loading curve, sigma_y with n: about 270; a
-//    sphere's: 30; a sphere and a cone together: 11-13; docs/verification.md).
-
-//
+//    each combination of parameters (reported, and the weakest combination in words where a
+//    parameter is not determined; measured: a sharp cone's loading curve, sigma_y with n: a
+//    condition number about 270; a sphere's: 30; a sphere and a cone together: 11-13).
 // The fit's quality is judged too (FitResult::quality): a fit whose rms misfit exceeds
 // poor_fit_rms_limit of a data set's largest value, or that ends with a parameter at one of its
-// bounds, is a poor fit -- its values are no answer, whatever the condition number says -- and is
+// bounds, is a poor fit -- its values are no answer, whatever the intervals say -- and is
 // never called identifiable.
 
 #include <functional>
@@ -36,7 +37,11 @@
 
 namespace indentsim {
 
-inline constexpr double identifiability_condition_limit = 100.0;
+/// A parameter is called determined when its 95% interval (noise and the model's own error) lies
+/// within the bounds and within this fraction of its value either side: the accuracy at which
+/// material parameters are compared between laboratories and with handbooks; a wider interval
+/// is reported as it is, with the parameter it trades against.
+inline constexpr double determination_limit = 0.05;
 /// A fit whose rms misfit exceeds this fraction of a data set's largest value (the peak force, the
 /// deepest imprint depth) is a poor fit.  The model's own discretization error is 0.1-1% of P at
 /// the default mesh and instruments' noise a few percent: a tenth of the peak left unexplained
@@ -67,17 +72,56 @@ struct FitProgress {
   std::string phase;     ///< StartOutcome::phase
 };
 
+struct StartOutcome {
+  int index = 0;  ///< the start's number within its phase (1, 2, ...; 0 a polish; K the K-th refinement)
+  std::vector<double> start, result;
+  double cost = 0.0;
+  int iterations = 0;
+  bool converged = false;
+  std::string message;  ///< Ceres' own words
+  /// "coarse" (a start on the coarse phase's meshes), "fine" (a start on the data sets' own
+  /// meshes), "polish" (from the coarse or first result, on meshes planned there), "refined"
+  /// (the polish repeated on meshes with twice the contact nodes, for the model's own error)
+  std::string phase = "fine";
+};
+
+/// Where a fit stood after its last accepted iteration: the solves it had finished, the one in
+/// progress (its `result` the point reached, `iterations` those done), and its counters.  A fit
+/// started with it (FitSettings::resume_from) takes the finished solves as they were and continues
+/// the one in progress from its point; the decisions that follow (the best start, the meshes
+/// planned at it) are the same, so it ends where the uninterrupted fit would, to the optimiser's
+/// tolerance (its trust region starts afresh).
+struct FitCheckpoint {
+  std::vector<StartOutcome> finished;
+  bool has_in_progress = false;
+  StartOutcome in_progress;
+  int forward_runs = 0, coarse_runs = 0, iterations = 0, failed_runs = 0, refused_evaluations = 0;
+};
+
 struct FitSettings {
-  int starts = 1;              ///< the load case's values, then points spread over the bounds
+  /// The load case's values, then Halton points spread over the bounds: several by default, so
+  /// that a flat valley or a second minimum is seen, not returned as the answer.
+  int starts = 4;
   int max_iterations = 50;     ///< Levenberg-Marquardt iterations per start
   bool finite_differences = false;  ///< force finite differences (the benchmark compares both)
   /// Levenberg-Marquardt travels on meshes with half the contact nodes, then the fine meshes are
   /// planned at its optimum and the result polished there (see fit()).
   bool coarse_first = true;
   bool replan_mesh = true;     ///< without the coarse phase: re-plan the mesh at the result and polish
+  /// Where the model's own error moves a parameter by more than the noise's standard error, the
+  /// forward meshes are refined (twice the contact nodes each time) and the optimum polished, at
+  /// most this many times.
+  int mesh_refinements = 1;
   std::function<void(const FitProgress&)> on_iteration;
   /// Called with each warning as it arises (FitResult::warnings keeps them too).
   std::function<void(const std::string&)> on_warning;
+  /// Called after every accepted iteration and every finished solve (fit_files.hpp writes it).
+  std::function<void(const FitCheckpoint&)> on_checkpoint;
+  /// After the fit: the table of candidate additions to the data (one forward run with
+  /// sensitivities each, p + 1 with finite differences).
+  bool design_experiments = true;
+  /// A checkpoint of the same problem to continue from (nullptr: from the start).
+  const FitCheckpoint* resume_from = nullptr;
 };
 
 struct FitProblem {
@@ -96,25 +140,55 @@ struct DataSetFit {
   double contact_half_width_planned = 0.0;  ///< the fixed mesh's a* [m]
 };
 
-struct StartOutcome {
-  std::vector<double> start, result;
-  double cost = 0.0;
-  int iterations = 0;
-  bool converged = false;
-  std::string message;  ///< Ceres' own words
-  /// "coarse" (a start on the coarse phase's meshes), "fine" (a start on the data sets' own
-  /// meshes), "polish" (from the coarse or first result, on meshes planned there)
-  std::string phase = "fine";
+
+/// What the fit can say of one parameter (FitResult::determination).
+struct ParameterDetermination {
+  /// The shift of the optimum that the forward model's own discretization error causes: the
+  /// error estimated at the optimum (Richardson, from the data sets at half their contact nodes on
+  /// the same meshes' plan, error_estimate.hpp's order) carried along the sensitivities,
+  /// -(J^T J)^+ J^T e.  The fit's value minus it is the fit a converged model would give, to the
+  /// estimate's accuracy.  0 where no estimate could be made (model_error_estimated).
+  double model_shift = 0.0;
+  /// The standard error of noise and model together: sqrt(std_error^2 + model_shift^2).
+  double total_std_error = 0.0;
+  /// The 95% interval: value -+ t(0.975, m - p) total_std_error (m points, p parameters).
+  double lower = 0.0, upper = 0.0;
+  double relative_half_width = 0.0;  ///< (upper - lower) / 2 / |value|
+  /// Within the bounds and within +-determination_limit of the value.
+  bool determined = false;
+  std::string verdict;  ///< "determined to +-1.8% (95%)" or "not determined by this data: ..."
+};
+
+/// One measurement that could be added to the fit's data (FitResult::experiment_design): what its
+/// sensitivities at the fitted parameters would do to each parameter's interval, from the Fisher
+/// information of the data and the addition together (noise alone, the same relative noise as
+/// the data's, 20 points).
+struct CandidateExperiment {
+  std::string name;         ///< "unloading branch", "deeper indent", "sphere", "cone", "sharper cone", "imprint profile"
+  std::string description;  ///< what exactly: "unloading from 1 um to 0.9 um, 20 points"
+  std::vector<double> relative_half_width;  ///< the predicted noise-only 95% half-width over |value|, per parameter
+  std::vector<double> shrink;               ///< today's noise-only half-width over the predicted one
+  std::string failure;                      ///< why it could not be evaluated ("" when it was)
 };
 
 struct FitResult {
   std::vector<double> values;      ///< in the order of problem.free
-  std::vector<double> std_errors;  ///< infinite for a combination the data do not determine
+  std::vector<double> std_errors;  ///< of the noise alone; infinite for a combination the data do not determine
+  std::vector<ParameterDetermination> determination;  ///< in the order of problem.free
+  /// The noise-only 95% half-width over |value| today, per parameter (the design's reference).
+  std::vector<double> noise_relative_half_width;
+  /// The experiment that would determine what this data does not (FitSettings::design_experiments).
+  std::vector<CandidateExperiment> experiment_design;
+  /// The model's error was estimated (every data set had a companion at half its contact nodes).
+  bool model_error_estimated = false;
+  /// The largest ratio, over the parameters, of the model's shift to the noise's standard error:
+  /// beyond 1 the forward mesh, not the data, limits what the fit can say.
+  double model_to_noise = 0.0;
   Eigen::MatrixXd covariance, correlation;
   std::vector<double> singular_values;  ///< of J diag(theta), largest first
   double condition_number = 0.0;
-  /// The condition number is within identifiability_condition_limit and the fit is good: a poor
-  /// fit is never called identifiable (its statistics describe a wrong optimum).
+  /// Every parameter is determined (ParameterDetermination) and the fit is good: a poor fit is
+  /// never called identifiable (its statistics describe a wrong optimum).
   bool identifiable = false;
   std::vector<double> weakest_direction;  ///< d ln theta of the weakest combination (unit norm)
   std::string poorly_determined;          ///< the weakest combination in words ("" if identifiable)
@@ -128,6 +202,7 @@ struct FitResult {
   std::vector<StartOutcome> starts;  ///< in the order run: coarse starts, then fine starts or the polish
   std::size_t selected_start = 0;    ///< the outcome the values come from
   bool mesh_replanned = false;  ///< the meshes were planned at a (coarse) result, not at the start
+  int mesh_refinements = 0;     ///< times the forward meshes were refined for the model's error
   /// The verdict: "good", or "poor fit: " and the problems joined by "; ".
   std::string quality = "good";
   /// What makes it poor, one phrase each: "rms 64% of the peak force", "material.n at its upper

@@ -42,9 +42,12 @@ struct FitCommandLine {
   std::vector<std::string> overrides;   ///< --set, on every data set's case
   CurveColumns columns;                 ///< --depth-column, --force-column, --depth-unit, --force-unit
   std::optional<int> starts;
+  std::optional<int> mesh_refinements;  ///< --mesh-refinements (FitSettings::mesh_refinements)
   std::string out;
   bool finite_differences = false;
   bool single_level = false;  ///< --single-level: no coarse phase (FitSettings::coarse_first)
+  bool resume = false;        ///< --resume: continue from the output folder's fit_checkpoint.json
+  bool no_design = false;     ///< --no-design: no experiment-design table (FitSettings::design_experiments)
 };
 
 struct FitJob {
@@ -68,5 +71,20 @@ std::string fit_curves_csv(const FitProblem& problem, const FitResult& result);
 /// Writes a fit's files into `dir` (created if needed), each atomically: fit.json,
 /// fit_curves.csv and fitted_case.toml (fitted_case_K.toml for the K-th data set beyond the first).
 void write_fit_results(const std::filesystem::path& dir, const FitProblem& problem, const FitResult& result);
+
+/// DIR/fit_checkpoint.json: where a fit stood after its last accepted iteration (FitCheckpoint),
+/// with a fingerprint of its problem (the data, the cases, the free parameters and bounds, the
+/// settings that steer the optimiser) so that only the same fit continues from it.
+inline constexpr const char* fit_checkpoint_name = "fit_checkpoint.json";
+std::string fit_fingerprint(const FitProblem& problem);
+void write_fit_checkpoint(const std::filesystem::path& dir, const FitProblem& problem, const FitCheckpoint& checkpoint);
+/// The checkpoint in `dir`.  Throws InputError naming the file when there is none, when it is
+/// damaged, or when it is another fit's (its fingerprint differs: the data, a case or a setting changed).
+FitCheckpoint read_fit_checkpoint(const std::filesystem::path& dir, const FitProblem& problem);
+
+/// A fit as `indentsim fit` runs it: a checkpoint in the job's folder after every accepted
+/// iteration (`resume`: continued from the one there), the results written when it ends and the
+/// checkpoint then removed.  Throws what fit() throws; a stopped fit leaves its checkpoint.
+FitResult run_fit_job(FitJob& job, bool resume);
 
 }  // namespace indentsim
