@@ -306,7 +306,10 @@ int command_fit(FitCommandLine cl, bool quiet, bool plot) {
           sets += fmt::format(" --set {}={:.6g}", key_of(parameter), e.best()[j]);
       }
       fmt::print(stderr, "the best parameters so far ({}, cost {:.4e}; not a converged fit):{}\nto fit again from there:{}\n",
-                 e.phase() == "coarse" ? "on the coarse meshes" : "on the cases' own meshes", e.cost(), values, sets);
+                 e.phase() == "coarse"    ? "on the coarse meshes"
+                 : e.phase() == "refined" ? "on the forward meshes refined for the model's error"
+                                          : "on the cases' own meshes",
+                 e.cost(), values, sets);
     }
     return 128 + e.signal();
   }
@@ -667,6 +670,8 @@ int main(int argc, char** argv) {
                 "continue the fit stopped in the output folder from its fit_checkpoint.json (the same command otherwise)");
   fit->add_flag("--no-design", fit_options.no_design,
                 "no table of the measurements that would narrow the intervals (it costs a run per candidate)");
+  fit->add_flag("--no-profile", fit_options.no_profile,
+                "linearized intervals only, no profile likelihood (it costs a few optimisations per parameter)");
   fit->add_flag("--no-plot", no_plot, "write no figure");
   fit->add_flag("--quiet,-q", quiet, "no progress line and no notes: the result, warnings and errors only");
 

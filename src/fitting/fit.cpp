@@ -320,7 +320,7 @@ std::pair<std::vector<MaterialParameter>, std::vector<std::pair<double, double>>
 std::string percent(double fraction) { return fmt::format("{:.3g}%", 100.0 * fraction); }
 
 /// Student's t at 0.975 for `dof` degrees of freedom: exact for 1 and 2, else the Cornish-Fisher
-/// expansion about the normal quantile (Abramowitz and Stegun 26.7.5; within 3e-3 at 3 degrees,
+/// expansion about the normal quantile (Abramowitz and Stegun 26.7.5; within 4e-3 at 3 degrees,
 /// closer beyond).
 double student_t975(double dof) {
   if (!(dof >= 1.0)) return std::numeric_limits<double>::infinity();
@@ -452,7 +452,7 @@ FitResult fit(const FitProblem& problem) {
   if (resume) {
     forward_runs = resume->forward_runs;
     coarse_runs = resume->coarse_runs;
-    result.iterations = resume->iterations;
+    result.iterations = resume->iterations + (resume->has_in_progress ? resume->in_progress.iterations : 0);
     failures.runs = resume->failed_runs;
     failures.refused = resume->refused_evaluations;
   }
@@ -477,7 +477,7 @@ FitResult fit(const FitProblem& problem) {
   };
 
   const auto solve_from = [&](const Level& level, const std::string& phase, const std::vector<double>& start,
-                              int start_index, int starts, int max_iterations) {
+                              int start_index, int starts, int max_iterations, int held = -1) {
     // Resumed: a solve the checkpoint finished is taken as it was; the one in progress continues.
     std::vector<double> from = start;
     int done_iterations = 0;
@@ -499,6 +499,9 @@ FitResult fit(const FitProblem& problem) {
       ceres_problem.SetParameterLowerBound(x.data(), static_cast<int>(j), problem.free[j].lower / scale[j]);
       ceres_problem.SetParameterUpperBound(x.data(), static_cast<int>(j), problem.free[j].upper / scale[j]);
     }
+    // A profile holds one parameter at its trial value and optimises the others.
+    if (held >= 0 && p > 1) ceres_problem.SetManifold(x.data(), new ceres::SubsetManifold(static_cast<int>(p), {held}));
+    if (held >= 0 && p == 1) ceres_problem.SetParameterBlockConstant(x.data());  // the cost at x alone
     FitProgress progress;
     progress.start = start_index;
     progress.starts = starts;
@@ -629,7 +632,44 @@ FitResult fit(const FitProblem& problem) {
   for (const auto& d : problem.data) m_total += d.values.size();
   bool all_determined = false;
   Eigen::MatrixXd fisher_jacobian;  // J at the last assessment (the design's reference)
+  std::string weakest_in_words;     // the weakest combination at the last assessment
   double fisher_s2 = std::numeric_limits<double>::quiet_NaN();
+  // A parameter's verdict from its interval (ParameterDetermination): determined within the
+  // bounds and +-determination_limit, else not, with the interval, the parameter it trades
+  // against and whether the forward mesh (the model's shift) or the data limit it.
+  const auto judge = [&](std::size_t j, ParameterDetermination& pd) {
+    const FreeParameter& f = problem.free[j];
+    const double value = result.values.empty() ? 0.0 : result.values[j];
+    const double half = (pd.upper - pd.lower) / 2.0;
+    pd.relative_half_width = value != 0.0 ? half / std::abs(value) : std::numeric_limits<double>::infinity();
+    const bool inside = pd.lower >= f.lower && pd.upper <= f.upper && !pd.profile_open;
+    pd.determined = std::isfinite(pd.relative_half_width) && pd.relative_half_width <= determination_limit && inside;
+    if (pd.determined) {
+      pd.verdict = fmt::format("determined to +-{} (95%)", percent(pd.relative_half_width));
+      return;
+    }
+    std::string reach;
+    if (pd.lower < f.lower) reach += fmt::format(", below the lower bound {:g}", f.lower);
+    if (pd.upper > f.upper) reach += fmt::format("{} above the upper bound {:g}", reach.empty() ? "," : " and", f.upper);
+    if (pd.profile_open) reach += ", the data's misfit staying within noise up to a bound";
+    const bool model_limited = std::abs(pd.model_shift) > result.std_errors[j];
+    pd.verdict = fmt::format("not determined {}: the 95% interval is [{:.4g}, {:.4g}] (+-{}){}",
+                             model_limited ? "at this forward mesh" : "by this data", pd.lower, pd.upper,
+                             percent(pd.relative_half_width), reach);
+    // The parameter it trades against: the strongest correlation.
+    std::size_t partner = j;
+    for (std::size_t k = 0; k < p; ++k)
+      if (k != j && (partner == j || std::abs(result.correlation(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(k))) >
+                                         std::abs(result.correlation(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(partner)))))
+        partner = k;
+    if (partner != j) {
+      const double c = result.correlation(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(partner));
+      if (std::abs(c) >= 0.5)
+        pd.verdict += fmt::format("; it trades against {} (correlation {:.3f})", key_of(problem.free[partner].parameter), c);
+    }
+    if (model_limited)
+      pd.verdict += "; the forward model's own discretization error is most of it (a finer mesh.contact_nodes narrows it)";
+  };
   const auto assess = [&](const Level& level, const std::vector<double>& theta) {
     const auto& models = level.models;
     const auto& costs = level.costs;
@@ -764,7 +804,6 @@ FitResult fit(const FitProblem& problem) {
     const double t = student_t975(dof);
     all_determined = true;
     for (std::size_t j = 0; j < p; ++j) {
-      const FreeParameter& f = problem.free[j];
       ParameterDetermination pd;
       pd.model_shift = shift_log[static_cast<Eigen::Index>(j)] * theta[j];
       pd.total_std_error = std::hypot(result.std_errors[j], pd.model_shift);
@@ -772,32 +811,7 @@ FitResult fit(const FitProblem& problem) {
       pd.upper = theta[j] + t * pd.total_std_error;
       pd.relative_half_width = theta[j] != 0.0 ? t * pd.total_std_error / std::abs(theta[j])
                                                : std::numeric_limits<double>::infinity();
-      const bool inside = pd.lower >= f.lower && pd.upper <= f.upper;
-      pd.determined = std::isfinite(pd.relative_half_width) && pd.relative_half_width <= determination_limit && inside;
-      if (pd.determined) {
-        pd.verdict = fmt::format("determined to +-{} (95%)", percent(pd.relative_half_width));
-      } else {
-        std::string reach;
-        if (pd.lower < f.lower) reach += fmt::format(", below the lower bound {:g}", f.lower);
-        if (pd.upper > f.upper) reach += fmt::format("{} above the upper bound {:g}", reach.empty() ? "," : " and", f.upper);
-        const bool model_limited = std::abs(pd.model_shift) > result.std_errors[j];
-        pd.verdict = fmt::format("not determined {}: the 95% interval is [{:.4g}, {:.4g}] (+-{}){}",
-                                 model_limited ? "at this forward mesh" : "by this data", pd.lower, pd.upper,
-                                 percent(pd.relative_half_width), reach);
-        // The parameter it trades against: the strongest correlation.
-        std::size_t partner = j;
-        for (std::size_t k = 0; k < p; ++k)
-          if (k != j && (partner == j || std::abs(result.correlation(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(k))) >
-                                             std::abs(result.correlation(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(partner)))))
-            partner = k;
-        if (partner != j) {
-          const double c = result.correlation(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(partner));
-          if (std::abs(c) >= 0.5)
-            pd.verdict += fmt::format("; it trades against {} (correlation {:.3f})", key_of(problem.free[partner].parameter), c);
-        }
-        if (model_limited)
-          pd.verdict += "; the forward model's own discretization error is most of it (a finer mesh.contact_nodes narrows it)";
-      }
+      judge(j, pd);
       all_determined = all_determined && pd.determined;
       result.model_to_noise = std::max(result.model_to_noise, result.std_errors[j] > 0.0
                                                                   ? std::abs(pd.model_shift) / result.std_errors[j]
@@ -808,7 +822,8 @@ FitResult fit(const FitProblem& problem) {
     // The weakest combination, in words: scaled so that its largest component is 1%.
     const Eigen::VectorXd weak = v.col(pp - 1);
     for (Eigen::Index j = 0; j < pp; ++j) result.weakest_direction.push_back(weak[j]);
-    if (!all_determined && p > 1) {
+    weakest_in_words.clear();
+    if (p > 1) {
       const Eigen::Index lead = [&] {
         Eigen::Index k = 0;
         weak.cwiseAbs().maxCoeff(&k);
@@ -824,7 +839,7 @@ FitResult fit(const FitProblem& problem) {
       std::string names = key_of(problem.free[static_cast<std::size_t>(lead)].parameter);
       for (Eigen::Index j = 0; j < pp; ++j)
         if (j != lead && std::abs(step[j]) >= 1e-4) names += " and " + key_of(problem.free[static_cast<std::size_t>(j)].parameter);
-      result.poorly_determined = fmt::format(
+      weakest_in_words = fmt::format(
           "{} trade off: raising {} by 1% {} changes the fit to the data by only {} (weighted rms, relative to each data "
           "set's largest value); condition number {:.3g}",
           names, key_of(problem.free[static_cast<std::size_t>(lead)].parameter), parts.empty() ? "alone" : parts,
@@ -834,23 +849,167 @@ FitResult fit(const FitProblem& problem) {
   };
   assess(*fine, theta);
 
+  struct Profile {
+    bool found = false;
+    std::vector<std::pair<double, double>> samples[2];  // (distance, cost - best) below and above
+    double room[2] = {0.0, 0.0};                        // the distances to the bounds
+  };
+  std::vector<Profile> profiles(p);
+  // The profile likelihood of each parameter, on the fit's own meshes before any refinement for
+  // the model's error (the noise's profile hardly depends on the mesh; there a run costs a fifth
+  // to an eighth): held at trial values on each side, the others optimised, until the cost has
+  // risen by t^2 s2 / 2 (the likelihood ratio at 95%; the linearized interval where the model is
+  // linear).  The crossing is predicted from the profile's quadratic growth, (cost - best) ~ h^2.
+  // The profile's samples are kept; the crossings are found from them with the final meshes' s2
+  // (the misfit of the meshes before refinement holds more of the model's error than the noise's)
+  // and applied about the final optimum, combined with t model_shift in quadrature.
+  if (problem.settings.profile && result.good() && p >= 1) {
+    const double dof = static_cast<double>(m_total) - static_cast<double>(p);
+    const double best_cost = result.cost;
+    const double s2 = dof > 0.0 ? 2.0 * best_cost / dof : 0.0;
+    const double t = student_t975(dof);
+    const double rise = 0.5 * t * t * s2;
+    const std::vector<double> optimum = theta;
+    constexpr int profile_iterations = 10;
+    if (rise > 0.0 && std::isfinite(rise)) {
+      for (std::size_t j = 0; j < p; ++j) {
+        const FreeParameter& f = problem.free[j];
+        Profile found;
+        bool failed = false;
+        for (int side = 0; side < 2 && !failed; ++side) {
+          const double sign = side == 0 ? -1.0 : 1.0;
+          const double bound = side == 0 ? f.lower : f.upper;
+          const double room = std::abs(bound - optimum[j]);
+          found.room[side] = room;
+          double h = t * result.std_errors[j];
+          if (!(h > 0.0) || !std::isfinite(h)) h = 0.1 * std::abs(optimum[j]);
+          int trial = 0;
+          // Each trial starts where the linearized model puts the others for that value of this
+          // one (the conditional mean, theta_k + cov_kj / cov_jj delta): on the valley, so that
+          // Levenberg-Marquardt needs an iteration or two.
+          const auto profile_at = [&](double distance) {
+            std::vector<double> start = optimum;
+            const double delta = sign * distance;
+            const double cjj = result.covariance(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(j));
+            for (std::size_t k = 0; k < p; ++k) {
+              if (k == j || !(cjj > 0.0) || !std::isfinite(cjj)) continue;
+              const double ckj = result.covariance(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(j));
+              if (std::isfinite(ckj))
+                start[k] = std::clamp(optimum[k] + ckj / cjj * delta, problem.free[k].lower, problem.free[k].upper);
+            }
+            start[j] = optimum[j] + delta;
+            ++trial;
+            const int index = 1000 * static_cast<int>(j + 1) + 100 * side + trial;
+            const StartOutcome o =
+                solve_from(*fine, "profile", start, index, starts, profile_iterations, static_cast<int>(j));
+            stop_if_interrupted();
+            if (std::isfinite(o.cost)) found.samples[side].emplace_back(distance, o.cost - best_cost);
+            return o.cost;
+          };
+          // With p = 1 the "profile" is the cost itself: a solve with its only parameter held
+          // evaluates it.  The profile grows about as the square of the distance: a trial's excess
+          // predicts the crossing, distance sqrt(rise / excess).
+          double distance = std::min(h, room), excess = profile_at(distance) - best_cost;
+          for (int widening = 0; std::isfinite(excess) && excess < rise && distance < room && widening < 4; ++widening) {
+            distance = std::min(room, excess > 0.0 ? 1.2 * distance * std::sqrt(rise / excess) : 2.0 * distance);
+            excess = profile_at(distance) - best_cost;
+          }
+          if (!std::isfinite(excess)) {
+            failed = true;
+            break;
+          }
+          if (excess < rise) continue;  // within the noise up to the bound (or four widenings)
+          if (excess > 2.0 * rise)  // far past the crossing: the quadratic prediction is checked once
+            profile_at(distance * std::sqrt(rise / excess));
+        }
+        if (failed) continue;  // the linearized interval stands
+        found.found = true;
+        profiles[j] = std::move(found);
+      }
+    }
+  }
+
   // The model's error beyond the noise's: the forward meshes refined (twice the contact nodes,
   // planned at the optimum) and the optimum polished there, up to settings.mesh_refinements times.
   while (result.model_to_noise > 1.0 && result.mesh_refinements < problem.settings.mesh_refinements) {
     const double factor = std::pow(2.0, result.mesh_refinements + 1);
-    Level refined = make_level(factor, theta, forward_runs);
+    std::optional<Level> refined;
+    try {
+      refined = make_level(factor, theta, forward_runs);
+    } catch (const InputError& e) {  // a refinement the case cannot take (mesh.max_unknowns): the answer stands
+      warn(fmt::format("the forward meshes could not be refined for the model's own error ({} times the contact "
+                       "nodes): {}",
+                       factor, e.what()));
+      break;
+    } catch (const SolverError& e) {
+      warn(fmt::format("the forward meshes could not be refined for the model's own error (their planning run at {} "
+                       "times the contact nodes failed): {}",
+                       factor, e.what()));
+      break;
+    }
     StartOutcome polished =
-        solve_from(refined, "refined", theta, result.mesh_refinements + 1, starts, problem.settings.max_iterations);
+        solve_from(*refined, "refined", theta, result.mesh_refinements + 1, starts, problem.settings.max_iterations);
     stop_if_interrupted();
     const bool usable = std::isfinite(polished.cost);
     result.starts.push_back(std::move(polished));
-    if (!usable) break;  // the refined meshes found nothing: the last level's answer stands
+    if (!usable) {  // the refined meshes found nothing: the last level's answer stands
+      warn(fmt::format("the polish on the forward meshes refined {} times for the model's own error found no "
+                       "successful run: the answer of the meshes before stands",
+                       factor));
+      break;
+    }
     ++result.mesh_refinements;
     theta = result.starts.back().result;
     result.selected_start = result.starts.size() - 1;
-    fine = std::move(refined);
+    fine = std::move(*refined);
     assess(*fine, theta);
   }
+  // The crossings at the final s2: from the nearest sample past it (quadratic growth), else,
+  // within the noise up to the bound, open; else extrapolated from the farthest sample.
+  for (std::size_t j = 0; j < p; ++j) {
+    if (!profiles[j].found) continue;
+    const double dof = static_cast<double>(m_total) - static_cast<double>(p);
+    const double t = student_t975(dof);
+    const double rise = 0.5 * t * t * (2.0 * result.cost / dof);
+    double reach[2] = {0.0, 0.0};
+    bool open = false, open_side[2] = {false, false};
+    for (int side = 0; side < 2; ++side) {
+      const auto& samples = profiles[j].samples[side];
+      const std::pair<double, double>* past = nullptr;
+      const std::pair<double, double>* farthest = nullptr;
+      for (const auto& sample : samples) {
+        if (sample.second >= rise && (!past || sample.first < past->first)) past = &sample;
+        if (!farthest || sample.first > farthest->first) farthest = &sample;
+      }
+      const double room = profiles[j].room[side];
+      if (past) {
+        reach[side] = std::min(room, past->first * std::sqrt(rise / past->second));
+      } else if (farthest && farthest->first >= room) {
+        reach[side] = room;
+        open_side[side] = true;
+      } else if (farthest && farthest->second > 0.0) {
+        reach[side] = std::min(room, farthest->first * std::sqrt(rise / farthest->second));
+        open_side[side] = reach[side] >= room;
+      } else {
+        reach[side] = room;
+        open_side[side] = true;
+      }
+      open = open || open_side[side];
+    }
+    ParameterDetermination& pd = result.determination[j];
+    pd.profiled = true;
+    pd.profile_lower = theta[j] - reach[0];
+    pd.profile_upper = theta[j] + reach[1];
+    pd.profile_open = open;
+    const double model = t * std::abs(pd.model_shift);
+    // An open side ends at its bound: the data say nothing of what lies beyond it.
+    pd.lower = open_side[0] ? problem.free[j].lower : theta[j] - std::hypot(reach[0], model);
+    pd.upper = open_side[1] ? problem.free[j].upper : theta[j] + std::hypot(reach[1], model);
+    judge(j, pd);
+  }
+  all_determined = std::all_of(result.determination.begin(), result.determination.end(),
+                               [](const ParameterDetermination& d) { return d.determined; });
+
   // Other starts that ended elsewhere at a cost the data cannot tell from the best's (a
   // likelihood-ratio test at 95% on their own meshes: 2 (cost - best) / s2 below chi2(p)) belong to
   // the answer: a flat valley, or a second minimum.  Each parameter's interval is widened to hold
@@ -860,8 +1019,15 @@ FitResult fit(const FitProblem& problem) {
     const double chi2 = chi2_95[std::min<std::size_t>(p, 6) - 1];
     const double dof_points = static_cast<double>(m_total) - static_cast<double>(p);
     std::vector<std::string> others;
+    std::vector<bool> widened(p, false);
     for (const std::string phase : {"coarse", "fine"}) {
-      const std::size_t best = best_start(result.starts, phase);
+      // The best of this very phase: its starts ran on the same meshes (a polish or a refinement
+      // did not).
+      std::size_t best = result.starts.size();
+      for (std::size_t k = 0; k < result.starts.size(); ++k)
+        if (result.starts[k].phase == phase && std::isfinite(result.starts[k].cost) &&
+            (best == result.starts.size() || result.starts[k].cost < result.starts[best].cost))
+          best = k;
       if (best == result.starts.size() || !(dof_points > 0.0)) continue;
       const StartOutcome& b = result.starts[best];
       const double s2 = 2.0 * b.cost / dof_points;
@@ -878,15 +1044,14 @@ FitResult fit(const FitProblem& problem) {
         if (!elsewhere) continue;
         std::string values;
         for (std::size_t j = 0; j < p; ++j) {
-          // The other end, moved by the offset between the two phases' optima.
-          const double other = theta[j] + (o.result[j] - b.result[j]);
+          // The other end, moved by the offset between the two phases' optima, within the bounds.
+          const double other = std::clamp(theta[j] + (o.result[j] - b.result[j]), problem.free[j].lower,
+                                          problem.free[j].upper);
           ParameterDetermination& pd = result.determination[j];
           if (other < pd.lower || other > pd.upper) {
-            pd.lower = std::max(problem.free[j].lower, std::min(pd.lower, other));
-            pd.upper = std::min(problem.free[j].upper, std::max(pd.upper, other));
-            if (!pd.determined)
-              pd.verdict += fmt::format("; distinct starts end within noise of the best cost across [{:.4g}, {:.4g}]",
-                                        pd.lower, pd.upper);
+            pd.lower = std::min(pd.lower, other);
+            pd.upper = std::max(pd.upper, other);
+            widened[j] = true;
           }
           values += fmt::format("{}{} = {:.4g}", values.empty() ? "" : ", ", key_of(problem.free[j].parameter), o.result[j]);
         }
@@ -894,19 +1059,14 @@ FitResult fit(const FitProblem& problem) {
       }
     }
     if (!others.empty()) {
-      all_determined = true;
       for (std::size_t j = 0; j < p; ++j) {
+        if (!widened[j]) continue;
         ParameterDetermination& pd = result.determination[j];
-        const double half = (pd.upper - pd.lower) / 2.0;
-        pd.relative_half_width = std::max(pd.relative_half_width, theta[j] != 0.0 ? half / std::abs(theta[j]) : half);
-        if (pd.determined && pd.relative_half_width > determination_limit) {
-          pd.determined = false;
-          pd.verdict = fmt::format("not determined by this data: distinct starts end within noise of the best cost "
-                                   "across [{:.4g}, {:.4g}]",
-                                   pd.lower, pd.upper);
-        }
-        all_determined = all_determined && pd.determined;
+        judge(j, pd);
+        pd.verdict += "; distinct starts end within noise of the best cost across it";
       }
+      all_determined = std::all_of(result.determination.begin(), result.determination.end(),
+                                   [](const ParameterDetermination& d) { return d.determined; });
       std::string list;
       for (const auto& o : others) list += "; " + o;
       warn(fmt::format("distinct starts ended at distinct points of a cost the data cannot tell from the best's{}: the "
@@ -914,6 +1074,7 @@ FitResult fit(const FitProblem& problem) {
                        list));
     }
   }
+  result.poorly_determined = all_determined ? std::string() : weakest_in_words;
 
   if (result.model_to_noise > 1.0) {
     int nodes = 0;
@@ -1046,7 +1207,11 @@ FitResult fit(const FitProblem& problem) {
         double peak = 0.0;
         for (double v : e.values) peak = std::max(peak, std::abs(v));
         if (!(peak > 0.0)) throw SolverError("the addition measures nothing at the fitted parameters");
-        const double factor = 1.0 / (peak * std::sqrt(static_cast<double>(e.values.size())));
+        // Rows scaled as the reference data set's (weight over sqrt of its points), so that each
+        // carries the same noise in residual units and s2 applies: the addition is measured with
+        // the data's relative noise, row for row.
+        const double factor =
+            data.weight / (peak * std::sqrt(static_cast<double>(data.values.size())));
         Eigen::MatrixXd added(static_cast<Eigen::Index>(e.values.size()), static_cast<Eigen::Index>(p));
         for (std::size_t i = 0; i < e.values.size(); ++i)
           for (std::size_t j = 0; j < p; ++j)

@@ -295,6 +295,7 @@ FitJob read_fit_job(const FitCommandLine& cl) {
   problem.settings.finite_differences = cl.finite_differences;
   if (cl.single_level) problem.settings.coarse_first = false;
   if (cl.no_design) problem.settings.design_experiments = false;
+  if (cl.no_profile) problem.settings.profile = false;
 
   if (free.empty()) throw InputError(cl.input, "--free", "name the parameters to fit, e.g. --free material.yield_stress,material.n");
   for (const auto& key : free) {
@@ -352,6 +353,10 @@ nlohmann::json fit_json(const FitProblem& problem, const FitResult& r) {
                                        {"model_shift", number(pd.model_shift)},
                                        {"std_error_total", number(pd.total_std_error)},
                                        {"interval_95", {number(pd.lower), number(pd.upper)}},
+                                       {"profile_interval_95_noise",
+                                        pd.profiled ? json{number(pd.profile_lower), number(pd.profile_upper)}
+                                                    : json(nullptr)},
+                                       {"profile_open_at_a_bound", pd.profile_open},
                                        {"relative_half_width_95", number(pd.relative_half_width)},
                                        {"determined", pd.determined},
                                        {"verdict", pd.verdict},
@@ -493,8 +498,8 @@ std::string fit_fingerprint(const FitProblem& problem) {
   }
   for (const FreeParameter& f : problem.free) text += fmt::format("free {} {:.17g} {:.17g}\n", key_of(f.parameter), f.lower, f.upper);
   const FitSettings& s = problem.settings;
-  text += fmt::format("settings {} {} {} {} {} {}\n", s.starts, s.max_iterations, s.finite_differences, s.coarse_first,
-                      s.replan_mesh, s.mesh_refinements);
+  text += fmt::format("settings {} {} {} {} {} {} {}\n", s.starts, s.max_iterations, s.finite_differences, s.coarse_first,
+                      s.replan_mesh, s.mesh_refinements, s.profile);
   return fmt::format("{:016x}", fnv1a(text.data(), text.size()));
 }
 
@@ -557,11 +562,18 @@ FitResult run_fit_job(FitJob& job, bool resume) {
   const std::filesystem::path dir = job.out_dir;
   std::optional<FitCheckpoint> restored;
   if (resume) restored = read_fit_checkpoint(dir, job.problem);
+  // The settings point at this call's locals only while it runs, whatever ends it.
+  struct Detach {
+    FitSettings& settings;
+    ~Detach() {
+      settings.resume_from = nullptr;
+      settings.on_checkpoint = nullptr;
+    }
+  } detach{job.problem.settings};
   job.problem.settings.resume_from = restored ? &*restored : nullptr;
   const FitProblem& problem = job.problem;
   job.problem.settings.on_checkpoint = [&dir, &problem](const FitCheckpoint& c) { write_fit_checkpoint(dir, problem, c); };
   FitResult result = fit(job.problem);
-  job.problem.settings.resume_from = nullptr;
   write_fit_results(dir, job.problem, result);
   std::error_code ec;
   std::filesystem::remove(dir / fit_checkpoint_name, ec);

@@ -321,6 +321,7 @@ PYBIND11_MODULE(_indentsim, m) {
       .def_readwrite("mesh_refinements", &FitCommandLine::mesh_refinements)
       .def_readwrite("resume", &FitCommandLine::resume)
       .def_readwrite("no_design", &FitCommandLine::no_design)
+      .def_readwrite("no_profile", &FitCommandLine::no_profile)
       .def_readwrite("out", &FitCommandLine::out)
       .def_readwrite("finite_differences", &FitCommandLine::finite_differences)
       .def_readwrite("single_level", &FitCommandLine::single_level)

@@ -239,8 +239,8 @@ TargetErrorChoice::Attempt run_pilot(const LoadCase& load_case, int contact_node
 
 LoadCase plan_case_for_target(const LoadCase& load_case, TargetErrorChoice& choice, int first_pilot_contact_nodes) {
   if (!load_case.mesh.target_error) throw std::invalid_argument("plan_case_for_target: no target");
-  // A pilot is refined at most by this factor before the next one: its cost is then an eighth of
-  // the next run's (a run's cost grows about as contact_nodes^3, docs/performance.md).
+  // A pilot is refined at most by this factor before the next one: its cost is then about an
+  // eighth of the next one's (a run's cost grows about as contact_nodes^3, docs/performance.md).
   constexpr double pilot_refinement = 2.0;
   constexpr int most_increments_factor = 16;
   choice.target = *load_case.mesh.target_error;
@@ -263,7 +263,9 @@ LoadCase plan_case_for_target(const LoadCase& load_case, TargetErrorChoice& choi
       }
     }
     const int needed = contact_nodes_for_target(pilot.relative_error, pilot.contact_nodes, choice.target, order);
-    if (needed <= pilot_refinement * pilot.contact_nodes) break;
+    // At most five doublings (10 to 320 contact nodes): a pilot beyond is a run in itself, and an
+    // estimate that keeps asking for more is better judged by the run and its retry.
+    if (needed <= pilot_refinement * pilot.contact_nodes || pilot.contact_nodes >= (first_pilot_contact_nodes << 5)) break;
     pilot_case.mesh.contact_nodes = static_cast<int>(pilot_refinement * pilot.contact_nodes);
   }
   LoadCase chosen = pilot_case;

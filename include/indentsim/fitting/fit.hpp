@@ -120,6 +120,9 @@ struct FitSettings {
   /// After the fit: the table of candidate additions to the data (one forward run with
   /// sensitivities each, p + 1 with finite differences).
   bool design_experiments = true;
+  /// After the fit: each parameter's profile-likelihood interval (a few optimisations of the others
+  /// with it held at trial values, on the final meshes).
+  bool profile = true;
   /// A checkpoint of the same problem to continue from (nullptr: from the start).
   const FitCheckpoint* resume_from = nullptr;
 };
@@ -151,7 +154,18 @@ struct ParameterDetermination {
   double model_shift = 0.0;
   /// The standard error of noise and model together: sqrt(std_error^2 + model_shift^2).
   double total_std_error = 0.0;
-  /// The 95% interval: value -+ t(0.975, m - p) total_std_error (m points, p parameters).
+  /// The 95% interval of the noise from the profile likelihood (FitSettings::profile): the values
+  /// of this parameter at which the cost, minimized over the others, has risen by t^2 s2 / 2 from
+  /// the optimum's (the linearized interval where the model is linear in the parameters; on a
+  /// curved valley it is not symmetric).  `profiled` false where it was not computed.
+  bool profiled = false;
+  double profile_lower = 0.0, profile_upper = 0.0;
+  /// The profile's cost stayed within the noise up to a bound on one side: the data do not close
+  /// the interval there.
+  bool profile_open = false;
+  /// The 95% interval: value -+ t(0.975, m - p) total_std_error (m points, p parameters); where the
+  /// profile was computed, its distances from the value on each side combined with t model_shift
+  /// in quadrature (and widened to hold other starts' ends of similar cost).
   double lower = 0.0, upper = 0.0;
   double relative_half_width = 0.0;  ///< (upper - lower) / 2 / |value|
   /// Within the bounds and within +-determination_limit of the value.
@@ -231,7 +245,8 @@ public:
   /// start had reached a successful forward run.
   const std::vector<double>& best() const { return best_; }
   double cost() const { return cost_; }
-  /// Where that cost was reached: "coarse" (on the coarse phase's meshes), "fine" or "polish".
+  /// Where that cost was reached: "coarse" (on the coarse phase's meshes), "fine", "polish" or
+  /// "refined" (StartOutcome::phase; costs of different meshes are compared as they are).
   const std::string& phase() const { return phase_; }
   int forward_runs() const { return forward_runs_; }
   int coarse_runs() const { return coarse_runs_; }

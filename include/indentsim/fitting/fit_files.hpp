@@ -48,6 +48,7 @@ struct FitCommandLine {
   bool single_level = false;  ///< --single-level: no coarse phase (FitSettings::coarse_first)
   bool resume = false;        ///< --resume: continue from the output folder's fit_checkpoint.json
   bool no_design = false;     ///< --no-design: no experiment-design table (FitSettings::design_experiments)
+  bool no_profile = false;    ///< --no-profile: linearized intervals only (FitSettings::profile)
 };
 
 struct FitJob {

@@ -159,9 +159,10 @@ std::optional<double> relative_force_error(const DiscretizationErrorEstimate& es
 
 /// mesh.target_error's plan: pilots of the case, in memory, each with its error estimate, from
 /// `first_pilot_contact_nodes` up.  A pilot whose estimate asks for more than twice its contact
-/// nodes is followed by one at twice them (the prediction from a coarse pilot is where an
-/// estimate is least asymptotic, and a run at N costs about N^3: the pilots cost a seventh of
-/// the run at most), so that the run is the cheapest whose estimate meets the target.  For a
+/// nodes is followed by one at twice them, at most five times (the prediction from a coarse pilot
+/// is where an estimate is least asymptotic; a run at N costs about N^3, so the pilots together
+/// cost about 8/7 of the last one, between a seventh of the run and about as much again), so that
+/// the run is the cheapest whose estimate meets the target.  For a
 /// run that depends on its increments the path comes first: a pilot whose change on halving its
 /// increments misses the target is repeated on the same mesh with more of them
 /// (increments_factor_for_target; at most 16 times the case's), and the run takes the last
