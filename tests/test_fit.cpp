@@ -136,6 +136,26 @@ FitProblem sphere_and_cone(SceneKind scene, bool with_sphere, bool with_cone, in
   return problem;
 }
 
+/// The sphere's load-unload curve (14 depths loading to 50 um, 6 back to 40 um) on 12 contact
+/// nodes, with 0.5% noise, E and sigma_y free, started 1.5 times away.
+LoadCase load_unload_truth() {
+  LoadCase truth = sphere(SceneKind::axisymmetric);
+  truth.mesh.contact_nodes = 12;
+  validate(truth);
+  return truth;
+}
+
+FitProblem load_unload_problem() {
+  const LoadCase truth = load_unload_truth();
+  FitProblem problem;
+  problem.free = {{MaterialParameter::E, 50e9, 800e9}, yield_and_hardening[0]};
+  FitData d = synthetic_data(truth, FitDataKind::force_depth_curve, load_unload_depths(50e-6, 14, 40e-6, 6),
+                             problem.free, 0.005, 4);
+  d.load_case = started_away(truth, problem.free, 1.5);
+  problem.data.push_back(d);
+  return problem;
+}
+
 TEST(Fit, AxisymmetricSphereAndConeGiveYieldStressAndHardeningBack) {
   const FitProblem problem = sphere_and_cone(SceneKind::axisymmetric, true, true);
   const FitResult r = fit(problem);
@@ -242,15 +262,9 @@ TEST(Fit, LoadUnloadCurveGivesModulusAndYieldStressWithFewerRunsThanFiniteDiffer
   // free too, a sphere's single curve holds sigma_y and n only to 5-10% at this noise: docs/verification.md);
   // 12 contact nodes, so the coarse phase runs on 6.  Sensitivities give every run its Jacobian:
   // one run per Levenberg-Marquardt step; finite differences need p + 1.
-  LoadCase truth = sphere(SceneKind::axisymmetric);
-  truth.mesh.contact_nodes = 12;
-  validate(truth);
-  const std::vector<FreeParameter> free{{MaterialParameter::E, 50e9, 800e9}, yield_and_hardening[0]};
-  FitData d = synthetic_data(truth, FitDataKind::force_depth_curve, load_unload_depths(50e-6, 14, 40e-6, 6), free, 0.005, 4);
-  d.load_case = started_away(truth, free, 1.5);
-  FitProblem problem;
-  problem.free = free;
-  problem.data.push_back(d);
+  const LoadCase truth = load_unload_truth();
+  FitProblem problem = load_unload_problem();
+  const std::vector<FreeParameter>& free = problem.free;
   // The subject is the gradients' cost: one start, no refinement for the model's error (the data
   // are the fit's own mesh's, so the model's estimated error is no error of these data).
   problem.settings.starts = 1;
@@ -418,15 +432,9 @@ TEST(Fit, AStopRequestEndsTheFitWithTheBestParametersSoFar) {
 // the finished start is taken as it was, the one in progress continues from its point, and the
 // fit ends where the fit that was never stopped ends.
 TEST(Fit, AStoppedFitResumedFromItsCheckpointEndsWhereTheWholeFitEnds) {
-  LoadCase truth = sphere(SceneKind::axisymmetric);
-  truth.mesh.contact_nodes = 12;
-  validate(truth);
-  const std::vector<FreeParameter> free{{MaterialParameter::E, 50e9, 800e9}, yield_and_hardening[0]};
-  FitData d = synthetic_data(truth, FitDataKind::force_depth_curve, load_unload_depths(50e-6, 14, 40e-6, 6), free, 0.005, 4);
-  d.load_case = started_away(truth, free, 1.5);
-  FitProblem problem;
-  problem.free = free;
-  problem.data.push_back(d);
+  const LoadCase truth = load_unload_truth();
+  FitProblem problem = load_unload_problem();
+  const std::vector<FreeParameter>& free = problem.free;
   problem.settings.starts = 2;
   problem.settings.mesh_refinements = 0;
   const FitResult whole = fit(problem);
