@@ -173,6 +173,30 @@ TEST(Fit, PlaneStrainCylinderAndWedgeGiveYieldStressAndHardeningBack) {
   std::printf("determined: %d of 2\n", determined);
 }
 
+// The profile likelihood where the model is nearly linear in its parameter: one parameter
+// (sigma_y of a sphere's loading curve, n fixed), the profile's crossings on both sides at the
+// linearized half-width t * standard error, to the curvature of P in sigma_y (10%).
+TEST(Fit, TheProfileOfANearlyLinearParameterIsItsLinearizedInterval) {
+  const LoadCase truth = sphere(SceneKind::axisymmetric);
+  FitProblem problem;
+  problem.free = {yield_and_hardening[0]};
+  FitData d = synthetic_data(truth, FitDataKind::force_depth_curve, depths(20e-6, 20), problem.free, 0.005, 5);
+  d.load_case = started_away(truth, problem.free, 1.3);
+  problem.data.push_back(d);
+  problem.settings.mesh_refinements = 0;
+  problem.settings.design_experiments = false;
+  const FitResult r = fit(problem);
+  print(r, problem.free);
+  const ParameterDetermination& pd = r.determination[0];
+  ASSERT_TRUE(pd.profiled);
+  EXPECT_FALSE(pd.profile_open);
+  const double linear = r.noise_relative_half_width[0] * r.values[0];
+  std::printf("profile [%.6g, %.6g] about %.6g; linearized half-width %.4g\n", pd.profile_lower, pd.profile_upper,
+              r.values[0], linear);
+  EXPECT_NEAR((r.values[0] - pd.profile_lower) / linear, 1.0, 0.1);
+  EXPECT_NEAR((pd.profile_upper - r.values[0]) / linear, 1.0, 0.1);
+}
+
 TEST(Fit, ConeLoadingCurveAloneCannotSeparateYieldStressFromHardening) {
   // Kick's law: under a sharp cone P = C alpha^2 with C(E, nu, sigma_y, n), one number.
   FitProblem problem = sphere_and_cone(SceneKind::axisymmetric, false, true, 10);
@@ -198,6 +222,8 @@ TEST(Fit, ConeLoadingCurveAloneCannotSeparateYieldStressFromHardening) {
   EXPECT_TRUE(std::any_of(r.warnings.begin(), r.warnings.end(), [](const std::string& w) {
     return w.find("distinct starts ended at distinct points") != std::string::npos;
   }));
+  // The profile of one of them stays within the noise up to a bound: open there.
+  EXPECT_TRUE(r.determination[0].profile_open || r.determination[1].profile_open);
 }
 
 // The design table's prediction against the fit that includes the addition: a sphere's loading

@@ -262,8 +262,9 @@ int command_fit(FitCommandLine cl, bool quiet, bool plot) {
       std::string values;
       for (std::size_t j = 0; j < p.theta.size(); ++j)
         values += fmt::format("  {}={:.5g}", key_of(job.problem.free[j].parameter), p.theta[j]);
-      const std::string where = p.phase == "polish" ? std::string("fit polish")
-                                                    : fmt::format("fit {} start {}/{}", p.phase, p.start, p.starts);
+      const std::string where = p.phase == "coarse" || p.phase == "fine"
+                                    ? fmt::format("fit {} start {}/{}", p.phase, p.start, p.starts)
+                                    : fmt::format("fit {}", p.phase);  // polish, refined, profile
       fmt::print(stderr, "{}{} iteration {:>2}  cost {:.4e}{}  ({} runs, {} coarse){}", terminal ? "\r\033[K" : "",
                  where, p.iteration, p.cost, values, p.forward_runs, p.coarse_runs, terminal ? "" : "\n");
       progress_shown = terminal;

@@ -456,10 +456,15 @@ FitResult fit(const FitProblem& problem) {
     failures.runs = resume->failed_runs;
     failures.refused = resume->refused_evaluations;
   }
-  const auto emit_checkpoint = [&](const StartOutcome* finished_now, const StartOutcome* in_progress) {
+  std::vector<StartOutcome> profile_outcomes;  // the profiles' solves (not starts), kept for a resume
+  // `in_progress_done`: the iterations of the solve in progress made before this process resumed
+  // it, already in result.iterations and counted again in its in_progress.iterations.
+  const auto emit_checkpoint = [&](const StartOutcome* finished_now, const StartOutcome* in_progress,
+                                   int in_progress_done) {
     if (!problem.settings.on_checkpoint) return;
     FitCheckpoint c;
     c.finished = result.starts;
+    c.finished.insert(c.finished.end(), profile_outcomes.begin(), profile_outcomes.end());
     if (finished_now) c.finished.push_back(*finished_now);
     if (in_progress) {
       c.has_in_progress = true;
@@ -467,7 +472,7 @@ FitResult fit(const FitProblem& problem) {
     }
     c.forward_runs = forward_runs;
     c.coarse_runs = coarse_runs;
-    c.iterations = result.iterations;
+    c.iterations = result.iterations - in_progress_done;
     c.failed_runs = failures.runs;
     c.refused_evaluations = failures.refused;
     problem.settings.on_checkpoint(c);
@@ -514,7 +519,7 @@ FitResult fit(const FitProblem& problem) {
       reached.cost = step.cost;
       reached.iterations = done_iterations + step.iteration;
       reached.phase = phase;
-      emit_checkpoint(nullptr, &reached);
+      emit_checkpoint(nullptr, &reached, done_iterations);
     };
     ProgressReporter reporter(problem.settings, progress, x, scale, forward_runs, coarse_runs, checkpoint_step);
     ceres::Solver::Options options;
@@ -549,7 +554,7 @@ FitResult fit(const FitProblem& problem) {
     outcome.phase = phase;
     result.iterations += iterations;
     // A solve a stop request ended is not finished: the checkpoint keeps its last accepted point.
-    if (!interruption_requested()) emit_checkpoint(&outcome, nullptr);
+    if (!interruption_requested()) emit_checkpoint(&outcome, nullptr, 0);
     return outcome;
   };
 
@@ -652,7 +657,7 @@ FitResult fit(const FitProblem& problem) {
     if (pd.lower < f.lower) reach += fmt::format(", below the lower bound {:g}", f.lower);
     if (pd.upper > f.upper) reach += fmt::format("{} above the upper bound {:g}", reach.empty() ? "," : " and", f.upper);
     if (pd.profile_open) reach += ", the data's misfit staying within noise up to a bound";
-    const bool model_limited = std::abs(pd.model_shift) > result.std_errors[j];
+    const bool model_limited = !pd.profile_open && std::abs(pd.model_shift) > result.std_errors[j];
     pd.verdict = fmt::format("not determined {}: the 95% interval is [{:.4g}, {:.4g}] (+-{}){}",
                              model_limited ? "at this forward mesh" : "by this data", pd.lower, pd.upper,
                              percent(pd.relative_half_width), reach);
@@ -852,25 +857,34 @@ FitResult fit(const FitProblem& problem) {
   struct Profile {
     bool found = false;
     std::vector<std::pair<double, double>> samples[2];  // (distance, cost - best) below and above
-    double room[2] = {0.0, 0.0};                        // the distances to the bounds
+    double bound[2] = {0.0, 0.0};                       // the bounds below and above
+    double room[2] = {0.0, 0.0};                        // their distances from the optimum sampled about
   };
   std::vector<Profile> profiles(p);
   // The profile likelihood of each parameter, on the fit's own meshes before any refinement for
   // the model's error (the noise's profile hardly depends on the mesh; there a run costs a fifth
   // to an eighth): held at trial values on each side, the others optimised, until the cost has
   // risen by t^2 s2 / 2 (the likelihood ratio at 95%; the linearized interval where the model is
-  // linear).  The crossing is predicted from the profile's quadratic growth, (cost - best) ~ h^2.
-  // The profile's samples are kept; the crossings are found from them with the final meshes' s2
-  // (the misfit of the meshes before refinement holds more of the model's error than the noise's)
-  // and applied about the final optimum, combined with t model_shift in quadrature.
-  if (problem.settings.profile && result.good() && p >= 1) {
+  // linear).  Trials are placed by the profile's quadratic growth, (cost - best) ~ h^2.  The
+  // samples are kept; the crossings are found from them with the final meshes' s2 (the misfit of
+  // the meshes before refinement holds more of the model's error than the noise's) and applied
+  // about the final optimum, combined with t model_shift in quadrature.  A fit that is poor
+  // already (misfit, a parameter at a bound) is not profiled.
+  const bool poor_already = [&] {
+    for (const DataSetFit& d : result.data)
+      if (!(d.rms_relative <= poor_fit_rms_limit)) return true;
+    for (std::size_t j = 0; j < p; ++j)
+      if (theta[j] <= problem.free[j].lower || theta[j] >= problem.free[j].upper) return true;
+    return false;
+  }();
+  if (problem.settings.profile && !poor_already) {
     const double dof = static_cast<double>(m_total) - static_cast<double>(p);
     const double best_cost = result.cost;
     const double s2 = dof > 0.0 ? 2.0 * best_cost / dof : 0.0;
     const double t = student_t975(dof);
     const double rise = 0.5 * t * t * s2;
     const std::vector<double> optimum = theta;
-    constexpr int profile_iterations = 10;
+    constexpr int profile_iterations = 20;
     if (rise > 0.0 && std::isfinite(rise)) {
       for (std::size_t j = 0; j < p; ++j) {
         const FreeParameter& f = problem.free[j];
@@ -880,13 +894,19 @@ FitResult fit(const FitProblem& problem) {
           const double sign = side == 0 ? -1.0 : 1.0;
           const double bound = side == 0 ? f.lower : f.upper;
           const double room = std::abs(bound - optimum[j]);
+          found.bound[side] = bound;
           found.room[side] = room;
           double h = t * result.std_errors[j];
           if (!(h > 0.0) || !std::isfinite(h)) h = 0.1 * std::abs(optimum[j]);
+          if (!(h > 0.0)) {
+            failed = true;  // nothing to scale a trial by: the linearized interval stands
+            break;
+          }
           int trial = 0;
           // Each trial starts where the linearized model puts the others for that value of this
           // one (the conditional mean, theta_k + cov_kj / cov_jj delta): on the valley, so that
-          // Levenberg-Marquardt needs an iteration or two.
+          // Levenberg-Marquardt needs an iteration or two.  A trial that does not converge is no
+          // profile value (its cost is above the profile's) and is not kept.
           const auto profile_at = [&](double distance) {
             std::vector<double> start = optimum;
             const double delta = sign * distance;
@@ -897,29 +917,30 @@ FitResult fit(const FitProblem& problem) {
               if (std::isfinite(ckj))
                 start[k] = std::clamp(optimum[k] + ckj / cjj * delta, problem.free[k].lower, problem.free[k].upper);
             }
-            start[j] = optimum[j] + delta;
+            start[j] = distance >= room ? bound : optimum[j] + delta;  // exactly on the bound: feasible
             ++trial;
             const int index = 1000 * static_cast<int>(j + 1) + 100 * side + trial;
-            const StartOutcome o =
+            StartOutcome o =
                 solve_from(*fine, "profile", start, index, starts, profile_iterations, static_cast<int>(j));
             stop_if_interrupted();
-            if (std::isfinite(o.cost)) found.samples[side].emplace_back(distance, o.cost - best_cost);
-            return o.cost;
+            o.phase = "profile";
+            profile_outcomes.push_back(o);
+            if (!std::isfinite(o.cost) || !o.converged) return std::numeric_limits<double>::quiet_NaN();
+            found.samples[side].emplace_back(distance, o.cost - best_cost);
+            return o.cost - best_cost;
           };
           // With p = 1 the "profile" is the cost itself: a solve with its only parameter held
-          // evaluates it.  The profile grows about as the square of the distance: a trial's excess
-          // predicts the crossing, distance sqrt(rise / excess).
-          double distance = std::min(h, room), excess = profile_at(distance) - best_cost;
+          // evaluates it.  A trial's excess predicts the crossing at distance sqrt(rise / excess).
+          double distance = std::min(h, room), excess = profile_at(distance);
           for (int widening = 0; std::isfinite(excess) && excess < rise && distance < room && widening < 4; ++widening) {
             distance = std::min(room, excess > 0.0 ? 1.2 * distance * std::sqrt(rise / excess) : 2.0 * distance);
-            excess = profile_at(distance) - best_cost;
+            excess = profile_at(distance);
           }
           if (!std::isfinite(excess)) {
             failed = true;
             break;
           }
-          if (excess < rise) continue;  // within the noise up to the bound (or four widenings)
-          if (excess > 2.0 * rise)  // far past the crossing: the quadratic prediction is checked once
+          if (excess > 2.0 * rise)  // far past the crossing: a trial at the prediction brackets it
             profile_at(distance * std::sqrt(rise / excess));
         }
         if (failed) continue;  // the linearized interval stands
@@ -964,48 +985,53 @@ FitResult fit(const FitProblem& problem) {
     fine = std::move(*refined);
     assess(*fine, theta);
   }
-  // The crossings at the final s2: from the nearest sample past it (quadratic growth), else,
-  // within the noise up to the bound, open; else extrapolated from the farthest sample.
-  for (std::size_t j = 0; j < p; ++j) {
-    if (!profiles[j].found) continue;
+  // The crossings at the final s2, between the farthest sample within the noise (the optimum
+  // itself, (0, 0), at least) and the nearest beyond it, where sqrt(cost - best) grows about
+  // linearly with the distance; none beyond: open at the bound if a sample reached it, else
+  // extrapolated from the farthest one.
+  {
     const double dof = static_cast<double>(m_total) - static_cast<double>(p);
     const double t = student_t975(dof);
-    const double rise = 0.5 * t * t * (2.0 * result.cost / dof);
-    double reach[2] = {0.0, 0.0};
-    bool open = false, open_side[2] = {false, false};
-    for (int side = 0; side < 2; ++side) {
-      const auto& samples = profiles[j].samples[side];
-      const std::pair<double, double>* past = nullptr;
-      const std::pair<double, double>* farthest = nullptr;
-      for (const auto& sample : samples) {
-        if (sample.second >= rise && (!past || sample.first < past->first)) past = &sample;
-        if (!farthest || sample.first > farthest->first) farthest = &sample;
+    const double rise = dof > 0.0 ? 0.5 * t * t * (2.0 * result.cost / dof) : 0.0;
+    for (std::size_t j = 0; j < p && rise > 0.0 && std::isfinite(rise); ++j) {
+      if (!profiles[j].found) continue;
+      double reach[2] = {0.0, 0.0};
+      bool open_side[2] = {false, false};
+      for (int side = 0; side < 2; ++side) {
+        std::pair<double, double> within{0.0, 0.0};
+        const std::pair<double, double>* beyond = nullptr;
+        for (const auto& sample : profiles[j].samples[side]) {
+          if (sample.second < rise && sample.first > within.first) within = sample;
+          if (sample.second >= rise && (!beyond || sample.first < beyond->first)) beyond = &sample;
+        }
+        const double room = std::abs(profiles[j].bound[side] - theta[j]);
+        if (beyond && beyond->first > within.first) {
+          const double a = std::sqrt(std::max(within.second, 0.0)), b = std::sqrt(beyond->second);
+          const double crossing = within.first + (std::sqrt(rise) - a) / (b - a) * (beyond->first - within.first);
+          reach[side] = std::min(room, std::clamp(crossing, within.first, beyond->first));
+        } else {
+          // Within the noise as far as sampled: open if that reached the bound the profile had.
+          const bool reached_bound = within.first > 0.0 && within.first >= 0.999 * profiles[j].room[side];
+          if (reached_bound || !(within.second > 0.0)) {
+            reach[side] = room;
+            open_side[side] = true;
+          } else {
+            reach[side] = std::min(room, within.first * std::sqrt(rise / within.second));
+            open_side[side] = reach[side] >= room;
+          }
+        }
       }
-      const double room = profiles[j].room[side];
-      if (past) {
-        reach[side] = std::min(room, past->first * std::sqrt(rise / past->second));
-      } else if (farthest && farthest->first >= room) {
-        reach[side] = room;
-        open_side[side] = true;
-      } else if (farthest && farthest->second > 0.0) {
-        reach[side] = std::min(room, farthest->first * std::sqrt(rise / farthest->second));
-        open_side[side] = reach[side] >= room;
-      } else {
-        reach[side] = room;
-        open_side[side] = true;
-      }
-      open = open || open_side[side];
+      ParameterDetermination& pd = result.determination[j];
+      pd.profiled = true;
+      pd.profile_open = open_side[0] || open_side[1];
+      pd.profile_lower = open_side[0] ? problem.free[j].lower : theta[j] - reach[0];
+      pd.profile_upper = open_side[1] ? problem.free[j].upper : theta[j] + reach[1];
+      const double model = t * std::abs(pd.model_shift);
+      // An open side ends at its bound: the data say nothing of what lies beyond it.
+      pd.lower = open_side[0] ? problem.free[j].lower : theta[j] - std::hypot(reach[0], model);
+      pd.upper = open_side[1] ? problem.free[j].upper : theta[j] + std::hypot(reach[1], model);
+      judge(j, pd);
     }
-    ParameterDetermination& pd = result.determination[j];
-    pd.profiled = true;
-    pd.profile_lower = theta[j] - reach[0];
-    pd.profile_upper = theta[j] + reach[1];
-    pd.profile_open = open;
-    const double model = t * std::abs(pd.model_shift);
-    // An open side ends at its bound: the data say nothing of what lies beyond it.
-    pd.lower = open_side[0] ? problem.free[j].lower : theta[j] - std::hypot(reach[0], model);
-    pd.upper = open_side[1] ? problem.free[j].upper : theta[j] + std::hypot(reach[1], model);
-    judge(j, pd);
   }
   all_determined = std::all_of(result.determination.begin(), result.determination.end(),
                                [](const ParameterDetermination& d) { return d.determined; });

@@ -121,7 +121,7 @@ struct FitSettings {
   /// sensitivities each, p + 1 with finite differences).
   bool design_experiments = true;
   /// After the fit: each parameter's profile-likelihood interval (a few optimisations of the others
-  /// with it held at trial values, on the final meshes).
+  /// with it held at trial values, on the meshes before any refinement; ParameterDetermination).
   bool profile = true;
   /// A checkpoint of the same problem to continue from (nullptr: from the start).
   const FitCheckpoint* resume_from = nullptr;
