@@ -2,7 +2,9 @@
 """How often the fit's 95% intervals hold the truth (issue 39).
 
 The truth's curve is made by `indentsim run` on a mesh FACTOR times finer than the fit's (so the
-forward model's own discretization error is in the data, as nature's would be), Gaussian noise of
+forward model's own discretization error is in the data, as nature's would be) and, for a
+path-dependent model (J2), with more increments (--data-set load.increments=[...] and --every K:
+the data are every K-th row, at the case's own depths), Gaussian noise of
 NOISE times the peak force is added with a new seed per realization, and `indentsim fit` fits it
 from a start away from the truth.  For every free parameter it counts the realizations whose
 interval_95 holds the truth, and how often a parameter called determined is within 5% of it.
@@ -38,6 +40,8 @@ def main():
     ap.add_argument("--start", required=True, help="key=start,...")
     ap.add_argument("--nodes", type=int, default=10, help="the fit's mesh.contact_nodes")
     ap.add_argument("--factor", type=int, default=3, help="the data's mesh is this many times finer")
+    ap.add_argument("--data-set", action="append", default=[], help="an override of the data's run only")
+    ap.add_argument("--every", type=int, default=1, help="the data are every K-th row of the data's run")
     ap.add_argument("--noise", type=float, default=0.005, help="relative to the peak force")
     ap.add_argument("--realizations", type=int, default=20)
     ap.add_argument("--set", action="append", default=[], help="more overrides of the case (data and fit)")
@@ -50,9 +54,11 @@ def main():
         sets = common + sum((["--set", f"{k}={v}"] for k, v in truth.items()), [])
         subprocess.run([args.indentsim, "run", args.case, "-q", "--out", str(data_run),
                         "--set", f"mesh.contact_nodes={args.factor * args.nodes}",
-                        "--set", 'mesh.error_estimate="off"'] + sets, check=True)
+                        "--set", 'mesh.error_estimate="off"'] + sets + sum((["--set", d] for d in args.data_set), []),
+                       check=True)
         with open(data_run / "curve.csv") as f:
-            rows = [r for r in csv.DictReader(f) if float(r["alpha"]) > 0.0]
+            rows = list(csv.DictReader(f))[::args.every]
+            rows = [r for r in rows if float(r["alpha"]) > 0.0]
         alpha = np.array([float(r["alpha"]) for r in rows])
         force = np.array([float(r["P"]) for r in rows])
         held = {k: 0 for k in truth}

@@ -458,24 +458,25 @@ TEST(Fit, AStopRequestEndsTheFitWithTheBestParametersSoFar) {
 // the finished start is taken as it was, the one in progress continues from its point, and the
 // fit ends where the fit that was never stopped ends.
 TEST(Fit, AStoppedFitResumedFromItsCheckpointEndsWhereTheWholeFitEnds) {
-  const LoadCase truth = load_unload_truth();
   FitProblem problem = load_unload_problem();
   const std::vector<FreeParameter>& free = problem.free;
   problem.settings.starts = 2;
+  problem.settings.threads = 1;
   problem.settings.mesh_refinements = 0;
   const FitResult whole = fit(problem);
 
   FitCheckpoint last;
   problem.settings.on_checkpoint = [&](const FitCheckpoint& c) {
     last = c;
-    if (c.has_in_progress && c.in_progress.phase == "coarse" && c.in_progress.index == 2) request_interruption(SIGTERM);
+    for (const StartOutcome& o : c.in_progress)
+      if (o.phase == "coarse" && o.index == 2) request_interruption(SIGTERM);
   };
   struct Lowered {
     ~Lowered() { clear_interruption(); }
   } lowered;
   EXPECT_THROW(fit(problem), FitInterrupted);
   clear_interruption();
-  ASSERT_TRUE(last.has_in_progress);
+  ASSERT_EQ(last.in_progress.size(), 1u);
   ASSERT_EQ(last.finished.size(), 1u);
   EXPECT_EQ(last.finished[0].result, whole.starts[0].result);  // the first start, bit for bit
 
@@ -487,6 +488,51 @@ TEST(Fit, AStoppedFitResumedFromItsCheckpointEndsWhereTheWholeFitEnds) {
   for (std::size_t j = 0; j < free.size(); ++j)
     EXPECT_NEAR(resumed.values[j], whole.values[j], 1e-3 * whole.determination[j].total_std_error) << key_of(free[j].parameter);
   EXPECT_GE(resumed.coarse_runs, last.coarse_runs);  // the counters go on from the checkpoint's
+}
+
+// Starts side by side (two threads) are the starts one after another: each start's runs are its
+// own, so every outcome, the answer and the runs counted are the same, bit for bit.  Stopped with
+// both starts in progress, the checkpoint holds both, and the resumed fit ends where it would have.
+TEST(Fit, StartsSideBySideEndWhereStartsOneAfterAnotherEnd) {
+  FitProblem problem = load_unload_problem();
+  const std::vector<FreeParameter>& free = problem.free;
+  problem.settings.starts = 3;
+  problem.settings.mesh_refinements = 0;
+  problem.settings.profile = false;
+  problem.settings.design_experiments = false;
+  problem.settings.threads = 1;
+  const FitResult one_after_another = fit(problem);
+  problem.settings.threads = 2;
+  const FitResult side_by_side = fit(problem);
+  ASSERT_EQ(side_by_side.starts.size(), one_after_another.starts.size());
+  for (std::size_t k = 0; k < side_by_side.starts.size(); ++k) {
+    EXPECT_EQ(side_by_side.starts[k].result, one_after_another.starts[k].result) << "start " << k;
+    EXPECT_EQ(side_by_side.starts[k].iterations, one_after_another.starts[k].iterations) << "start " << k;
+  }
+  EXPECT_EQ(side_by_side.values, one_after_another.values);
+  EXPECT_EQ(side_by_side.forward_runs, one_after_another.forward_runs);
+  EXPECT_EQ(side_by_side.coarse_runs, one_after_another.coarse_runs);
+  EXPECT_EQ(side_by_side.iterations, one_after_another.iterations);
+
+  FitCheckpoint last;
+  problem.settings.on_checkpoint = [&](const FitCheckpoint& c) {
+    last = c;
+    if (c.in_progress.size() == 2) request_interruption(SIGTERM);
+  };
+  struct Lowered {
+    ~Lowered() { clear_interruption(); }
+  } lowered;
+  EXPECT_THROW(fit(problem), FitInterrupted);
+  clear_interruption();
+  ASSERT_EQ(last.in_progress.size(), 2u);
+  problem.settings.on_checkpoint = nullptr;
+  problem.settings.resume_from = &last;
+  problem.settings.threads = 1;  // resumed on fewer cores: the waiting start is kept until its turn
+  const FitResult resumed = fit(problem);
+  ASSERT_EQ(resumed.starts.size(), one_after_another.starts.size());
+  for (std::size_t j = 0; j < free.size(); ++j)
+    EXPECT_NEAR(resumed.values[j], one_after_another.values[j], 1e-3 * one_after_another.determination[j].total_std_error)
+        << key_of(free[j].parameter);
 }
 
 class FitCli : public testing::CliTest {

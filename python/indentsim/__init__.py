@@ -409,7 +409,7 @@ def analyze(curve, overrides=None, indenter=None, depth_column="", force_column=
 
 def fit(input, data=None, free=None, bounds=None, overrides=None, starts=None, out=None,
         finite_differences=False, single_level=False, depth_column="", force_column="", depth_unit="",
-        force_unit="", mesh_refinements=None, resume=False, design=True, profile=True):
+        force_unit="", mesh_refinements=None, resume=False, design=True, profile=True, threads=None):
     """Material parameters from measured curves, as `indentsim fit`: `input` a load case with
     `data` (a curve file or a list of them) or a fit file; `free` the keys to fit (one key, a list
     of keys, or the CLI's "key,key"); `bounds` {key: (lower, upper)} (or the CLI's
@@ -417,7 +417,8 @@ def fit(input, data=None, free=None, bounds=None, overrides=None, starts=None, o
     the forward meshes may be refined where the model's own error moves a parameter more than the
     noise (default 1); `resume` continues the fit stopped in `out` from its fit_checkpoint.json;
     `design=False` skips the table of measurements that would narrow the intervals; `profile=False`
-    keeps the linearized intervals (no profile likelihood).
+    keeps the linearized intervals (no profile likelihood); `threads` how many starts run side by
+    side (default: the cores this process may use; the answer does not depend on it).
     Each parameter of the result has its 95% interval and verdict.  Writes fit.json, fit_curves.csv and
     fitted_case.toml into `out` (or the fit file's [fit] out, else out/fit) and returns fit.json's
     content.  Ctrl-C (or request_stop()) stops it with KeyboardInterrupt."""
@@ -435,6 +436,10 @@ def fit(input, data=None, free=None, bounds=None, overrides=None, starts=None, o
         if isinstance(mesh_refinements, (bool, np.bool_)) or not isinstance(mesh_refinements, (int, np.integer)):
             raise InputError(f"mesh_refinements: must be an integer (got {mesh_refinements!r})")
         c.mesh_refinements = max(-1, min(int(mesh_refinements), 1000))
+    if threads is not None:
+        if isinstance(threads, (bool, np.bool_)) or not isinstance(threads, (int, np.integer)):
+            raise InputError(f"threads: must be an integer (got {threads!r})")
+        c.threads = max(-1, min(int(threads), 100000))
     c.out = os.fspath(out) if out else ""
     c.finite_differences, c.single_level, c.resume = finite_differences, single_level, bool(resume)
     c.no_design, c.no_profile = not design, not profile

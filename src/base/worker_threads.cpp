@@ -1,9 +1,12 @@
 #include "indentsim/base/worker_threads.hpp"
 
 #include <dlfcn.h>
+#include <sched.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <mutex>
+#include <thread>
 
 namespace indentsim {
 
@@ -62,6 +65,13 @@ bool stop_idle_blas_workers() {
   if (limit_library_threads() != 1) return false;
   const auto shutdown = find<int (*)()>("blas_thread_shutdown_");
   return shutdown && shutdown() == 0;
+}
+
+int usable_cores() {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (sched_getaffinity(0, sizeof(set), &set) == 0) return std::max(1, CPU_COUNT(&set));
+  return std::max(1u, std::thread::hardware_concurrency());
 }
 
 }  // namespace indentsim

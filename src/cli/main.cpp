@@ -8,6 +8,7 @@
 #include <cstring>
 #include <optional>
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <unistd.h>
@@ -265,8 +266,16 @@ int command_fit(FitCommandLine cl, bool quiet, bool plot) {
       const std::string where = p.phase == "coarse" || p.phase == "fine"
                                     ? fmt::format("fit {} start {}/{}", p.phase, p.start, p.starts)
                                     : fmt::format("fit {}", p.phase);  // polish, refined, profile
-      fmt::print(stderr, "{}{} iteration {:>2}  cost {:.4e}{}  ({} runs, {} coarse){}", terminal ? "\r\033[K" : "",
-                 where, p.iteration, p.cost, values, p.forward_runs, p.coarse_runs, terminal ? "" : "\n");
+      const auto duration = [](double seconds) {
+        return seconds < 90.0 ? fmt::format("{:.0f} s", seconds)
+               : seconds < 5400.0 ? fmt::format("{:.1f} min", seconds / 60.0)
+                                  : fmt::format("{:.1f} h", seconds / 3600.0);
+      };
+      const std::string remaining =
+          std::isfinite(p.remaining_seconds) ? fmt::format(", remaining ~{}", duration(p.remaining_seconds)) : "";
+      fmt::print(stderr, "{}{} iteration {:>2}  cost {:.4e}{}  ({} runs, {} coarse; elapsed {}{}){}",
+                 terminal ? "\r\033[K" : "", where, p.iteration, p.cost, values, p.forward_runs, p.coarse_runs,
+                 duration(p.elapsed_seconds), remaining, terminal ? "" : "\n");
       progress_shown = terminal;
     };
   }
@@ -333,8 +342,17 @@ int command_fit(FitCommandLine cl, bool quiet, bool plot) {
   }(), [&] {
     if (!result.model_error_estimated) return std::string("; the model's own error not estimated");
     std::string s = "; the model's discretization shift ";
-    for (std::size_t j = 0; j < result.values.size(); ++j)
+    bool increments = false;
+    for (std::size_t j = 0; j < result.values.size(); ++j) {
       s += fmt::format("{}{:.3g}", j ? ", " : "", result.determination[j].model_shift);
+      increments = increments || result.determination[j].model_shift_increments != 0.0;
+    }
+    if (increments) {
+      s += " (the increments' share ";
+      for (std::size_t j = 0; j < result.values.size(); ++j)
+        s += fmt::format("{}{:.3g}", j ? ", " : "", result.determination[j].model_shift_increments);
+      s += ")";
+    }
     return s;
   }());
   if (result.good())
@@ -658,6 +676,9 @@ int main(int argc, char** argv) {
   fit->add_option("--mesh-refinements", fit_options.mesh_refinements,
                   "times the forward meshes may be refined (twice the contact nodes each) where the model's own "
                   "error moves a parameter more than the noise does (default 1)");
+  fit->add_option("--threads", fit_options.threads,
+                  "starts run side by side on this many threads (default: the cores this process may use); the "
+                  "answer does not depend on it");
   fit->add_option("--set", fit_options.overrides, "override one key of every data set's case")->allow_extra_args(false)->take_all();
   fit->add_option("--out", fit_options.out, "output folder (default out/fit, or [fit] out)");
   fit->add_option("--depth-column", fit_options.columns.depth_column, "the curve's depth column (default alpha)");

@@ -290,6 +290,10 @@ FitJob read_fit_job(const FitCommandLine& cl) {
   if (problem.settings.mesh_refinements < 0 || problem.settings.mesh_refinements > 4)
     throw InputError(cl.mesh_refinements ? "--mesh-refinements" : cl.input, "mesh_refinements",
                      "must be between 0 and 4 (each doubles the forward meshes' contact nodes)");
+  if (cl.threads) {
+    if (*cl.threads < 1 || *cl.threads > 1024) throw InputError("--threads", "threads", "must be between 1 and 1024");
+    problem.settings.threads = *cl.threads;
+  }
   if (!cl.out.empty()) job.out_dir = cl.out;
   if (job.out_dir.empty()) job.out_dir = "out/fit";
   problem.settings.finite_differences = cl.finite_differences;
@@ -351,6 +355,7 @@ nlohmann::json fit_json(const FitProblem& problem, const FitResult& r) {
     parameters[key_of(f.parameter)] = {{"value", r.values[k]},
                                        {"std_error", number(r.std_errors[k])},
                                        {"model_shift", number(pd.model_shift)},
+                                       {"model_shift_increments", number(pd.model_shift_increments)},
                                        {"std_error_total", number(pd.total_std_error)},
                                        {"interval_95", {number(pd.lower), number(pd.upper)}},
                                        {"profile_interval_95_noise",
@@ -384,6 +389,9 @@ nlohmann::json fit_json(const FitProblem& problem, const FitResult& r) {
   j["determination_limit"] = determination_limit;
   j["model_error_estimated"] = r.model_error_estimated;
   j["model_shift_over_noise"] = number(r.model_to_noise);
+  j["increments_shift_over_noise"] = number(r.increments_to_noise);
+  j["increments_factor"] = r.increments_factor;
+  j["values_with_the_model_error_taken_off"] = r.corrected_values.empty() ? json(nullptr) : json(r.corrected_values);
   j["weakest_direction"] = r.weakest_direction;
   j["poorly_determined"] = r.poorly_determined.empty() ? json(nullptr) : json(r.poorly_determined);
   j["rms_residual"] = {{"relative", r.rms_relative}};
@@ -510,7 +518,9 @@ void write_fit_checkpoint(const std::filesystem::path& dir, const FitProblem& pr
   nlohmann::json finished = nlohmann::json::array();
   for (const StartOutcome& o : c.finished) finished.push_back(outcome_json(o));
   j["finished"] = finished;
-  j["in_progress"] = c.has_in_progress ? outcome_json(c.in_progress) : nlohmann::json(nullptr);
+  nlohmann::json in_progress = nlohmann::json::array();  // starts side by side: one each
+  for (const StartOutcome& o : c.in_progress) in_progress.push_back(outcome_json(o));
+  j["in_progress"] = in_progress;
   j["forward_runs"] = c.forward_runs;
   j["coarse_runs"] = c.coarse_runs;
   j["iterations"] = c.iterations;
@@ -539,10 +549,12 @@ FitCheckpoint read_fit_checkpoint(const std::filesystem::path& dir, const FitPro
   FitCheckpoint c;
   try {
     for (const auto& o : j.at("finished")) c.finished.push_back(outcome_of(o));
-    if (!j.at("in_progress").is_null()) {
-      c.has_in_progress = true;
-      c.in_progress = outcome_of(j.at("in_progress"));
-    }
+    // A list; one object or null in checkpoints written before starts ran side by side.
+    const nlohmann::json& in_progress = j.at("in_progress");
+    if (in_progress.is_array())
+      for (const auto& o : in_progress) c.in_progress.push_back(outcome_of(o));
+    else if (!in_progress.is_null())
+      c.in_progress.push_back(outcome_of(in_progress));
     c.forward_runs = j.at("forward_runs").get<int>();
     c.coarse_runs = j.at("coarse_runs").get<int>();
     c.iterations = j.at("iterations").get<int>();
@@ -553,7 +565,7 @@ FitCheckpoint read_fit_checkpoint(const std::filesystem::path& dir, const FitPro
   }
   const std::size_t p = problem.free.size();
   const auto sized = [&](const StartOutcome& o) { return o.start.size() == p && o.result.size() == p; };
-  if (!std::all_of(c.finished.begin(), c.finished.end(), sized) || (c.has_in_progress && !sized(c.in_progress)))
+  if (!std::all_of(c.finished.begin(), c.finished.end(), sized) || !std::all_of(c.in_progress.begin(), c.in_progress.end(), sized))
     throw InputError(file.string(), "--resume", "the checkpoint is damaged: a start has the wrong number of parameters");
   return c;
 }

@@ -319,6 +319,7 @@ PYBIND11_MODULE(_indentsim, m) {
       .def_readwrite("overrides", &FitCommandLine::overrides)
       .def_readwrite("starts", &FitCommandLine::starts)
       .def_readwrite("mesh_refinements", &FitCommandLine::mesh_refinements)
+      .def_readwrite("threads", &FitCommandLine::threads)
       .def_readwrite("resume", &FitCommandLine::resume)
       .def_readwrite("no_design", &FitCommandLine::no_design)
       .def_readwrite("no_profile", &FitCommandLine::no_profile)

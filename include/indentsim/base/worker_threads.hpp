@@ -25,4 +25,8 @@ int limit_library_threads();
 /// (Python with NumPy): a shutdown would take their workers away mid-call.  True if it stopped them.
 bool stop_idle_blas_workers();
 
+/// The cores this process may run on: its CPU affinity (what Slurm, taskset or a container's
+/// cpuset grant), not the machine's count; at least 1.
+int usable_cores();
+
 }  // namespace indentsim

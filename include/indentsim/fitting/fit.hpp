@@ -9,7 +9,7 @@
 // Statistics at the optimum (the Jacobian J of r in theta):
 //  - covariance s2 (J^T J)^-1 with s2 = sum r^2 / (m - p), the residuals' own scatter: standard
 //    errors of the noise, assuming independent errors of equal size within a data set;
-//  - the model's own discretization error, estimated at the optimum (each data set at half its
+//  - the model's own discretization error, estimated at the optimum (each data set with twice its
 //    contact nodes, Richardson) and carried along the sensitivities into a shift of each
 //    parameter; a 0.3% systematic difference moves a parameter along a flat valley by many
 //    standard errors of the noise, so the interval must hold it (ParameterDetermination);
@@ -70,6 +70,10 @@ struct FitProgress {
   int forward_runs = 0;  ///< on the data sets' own meshes
   int coarse_runs = 0;   ///< on the coarse phase's meshes
   std::string phase;     ///< StartOutcome::phase
+  double elapsed_seconds = 0.0;
+  /// A forecast of the fit's remaining wall time (fit()'s FitForecast): the runs each phase still
+  /// needs, at the time per run measured on its meshes; NaN before a run has been timed.
+  double remaining_seconds = 0.0;
 };
 
 struct StartOutcome {
@@ -85,16 +89,16 @@ struct StartOutcome {
   std::string phase = "fine";
 };
 
-/// Where a fit stood after its last accepted iteration: the solves it had finished, the one in
-/// progress (its `result` the point reached, `iterations` those done), and its counters.  A fit
-/// started with it (FitSettings::resume_from) takes the finished solves as they were and continues
-/// the one in progress from its point; the decisions that follow (the best start, the meshes
-/// planned at it) are the same, so it ends where the uninterrupted fit would, to the optimiser's
-/// tolerance (its trust region starts afresh).
+/// Where a fit stood after its last accepted iteration: the solves it had finished, those in
+/// progress (starts run side by side: each one's `result` the point reached, `iterations` those
+/// done), and its counters (`iterations`: of the finished solves).  A fit started with it
+/// (FitSettings::resume_from) takes the finished solves as they were and continues those in
+/// progress from their points; the decisions that follow (the best start, the meshes planned at
+/// it) are the same, so it ends where the uninterrupted fit would, to the optimiser's tolerance
+/// (its trust region starts afresh).
 struct FitCheckpoint {
   std::vector<StartOutcome> finished;
-  bool has_in_progress = false;
-  StartOutcome in_progress;
+  std::vector<StartOutcome> in_progress;
   int forward_runs = 0, coarse_runs = 0, iterations = 0, failed_runs = 0, refused_evaluations = 0;
 };
 
@@ -112,6 +116,10 @@ struct FitSettings {
   /// forward meshes are refined (twice the contact nodes each time) and the optimum polished, at
   /// most this many times.
   int mesh_refinements = 1;
+  /// The starts of a phase run side by side on this many threads (0: the cores this process may
+  /// use), each run single-threaded; the outcomes do not depend on it.
+  int threads = 0;
+  /// Called after every iteration of any solve, one call at a time (from the thread of the solve).
   std::function<void(const FitProgress&)> on_iteration;
   /// Called with each warning as it arises (FitResult::warnings keeps them too).
   std::function<void(const std::string&)> on_warning;
@@ -147,11 +155,14 @@ struct DataSetFit {
 /// What the fit can say of one parameter (FitResult::determination).
 struct ParameterDetermination {
   /// The shift of the optimum that the forward model's own discretization error causes: the
-  /// error estimated at the optimum (Richardson, from the data sets at half their contact nodes on
-  /// the same meshes' plan, error_estimate.hpp's order) carried along the sensitivities,
+  /// error estimated at the optimum (Richardson, from the data sets with twice their contact nodes
+  /// on the same meshes' plan -- half where twice exceeds mesh.max_unknowns -- error_estimate.hpp's order) carried along the sensitivities,
   /// -(J^T J)^+ J^T e.  The fit's value minus it is the fit a converged model would give, to the
   /// estimate's accuracy.  0 where no estimate could be made (model_error_estimated).
   double model_shift = 0.0;
+  /// The increments' share of model_shift, for a path-dependent model (J2, friction): estimated
+  /// from the same mesh with twice the increments (Richardson, order 1); 0 for the others.
+  double model_shift_increments = 0.0;
   /// The standard error of noise and model together: sqrt(std_error^2 + model_shift^2).
   double total_std_error = 0.0;
   /// The 95% interval of the noise from the profile likelihood (FitSettings::profile): the values
@@ -193,11 +204,19 @@ struct FitResult {
   std::vector<double> noise_relative_half_width;
   /// The experiment that would determine what this data does not (FitSettings::design_experiments).
   std::vector<CandidateExperiment> experiment_design;
-  /// The model's error was estimated (every data set had a companion at half its contact nodes).
+  /// The model's error was estimated (every data set had a companion with twice its contact nodes).
   bool model_error_estimated = false;
   /// The largest ratio, over the parameters, of the model's shift to the noise's standard error:
   /// beyond 1 the forward mesh, not the data, limits what the fit can say.
   double model_to_noise = 0.0;
+  /// The same for the increments' share of the shift (path-dependent models; else 0).
+  double increments_to_noise = 0.0;
+  /// The final forward model's increments over the load cases' own (refined for the model's error).
+  int increments_factor = 1;
+  /// Where the model's shift exceeded the noise: the optimum of the model with its estimated error
+  /// taken off (the converged model's, to the estimate's accuracy); each model_shift is the
+  /// distance from it.  Empty otherwise (the shift is then the linearized one).
+  std::vector<double> corrected_values;
   Eigen::MatrixXd covariance, correlation;
   std::vector<double> singular_values;  ///< of J diag(theta), largest first
   double condition_number = 0.0;

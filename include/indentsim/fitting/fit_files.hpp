@@ -43,6 +43,7 @@ struct FitCommandLine {
   CurveColumns columns;                 ///< --depth-column, --force-column, --depth-unit, --force-unit
   std::optional<int> starts;
   std::optional<int> mesh_refinements;  ///< --mesh-refinements (FitSettings::mesh_refinements)
+  std::optional<int> threads;           ///< --threads (FitSettings::threads): the machine's, not the fit's
   std::string out;
   bool finite_differences = false;
   bool single_level = false;  ///< --single-level: no coarse phase (FitSettings::coarse_first)
