@@ -10,9 +10,13 @@
 // the data's path at the truth, without sensitivities: the unit the goal is stated in (a
 // three-parameter fit in under 15 of them).
 //
-//   indentsim_fit_bench [repeats] [--runs-only]
+//   indentsim_fit_bench [repeats] [--runs-only] [--threads]
 //     repeats: forward runs are timed `repeats` times (default 3), medians; each fit is run once
 //     (its run count is deterministic).  --runs-only: the forward-run timings alone (profiling).
+//     --threads: instead of the table, the sigma_y, n fit with the defaults (4 starts, profiles,
+//     design) on 1 thread and on the cores this process may use: the wall times, their ratio, and
+//     the progress line's forecast of the remaining time against the time that remained, at a
+//     quarter, half and three quarters of the fit.
 #include <algorithm>
 #include <chrono>
 #include <cstdlib>
@@ -22,6 +26,7 @@
 
 #include <fmt/format.h>
 
+#include "indentsim/base/worker_threads.hpp"
 #include "indentsim/fitting/fit.hpp"
 #include "indentsim/input/load_case.hpp"
 #include "bench_support.hpp"
@@ -46,9 +51,10 @@ std::vector<FreeParameter> free_parameters(const LoadCase& truth, const std::vec
 
 int main(int argc, char** argv) {
   int repeats = 3;
-  bool runs_only = false;
+  bool runs_only = false, threads_only = false;
   for (int i = 1; i < argc; ++i) {
     if (std::string(argv[i]) == "--runs-only") runs_only = true;
+    else if (std::string(argv[i]) == "--threads") threads_only = true;
     else repeats = std::max(1, std::atoi(argv[i]));
   }
   const LoadCase truth = read_load_case(std::string(INDENTSIM_SOURCE_DIR) + "/loadcases/axisymmetric/steel_sphere.toml",
@@ -86,6 +92,43 @@ int main(int argc, char** argv) {
     fmt::print("forward run: {:.3f} s (median of {}); with sensitivities of 3 parameters: {:.3f} s ({:.2f}x)\n\n", unit,
                repeats, median(with_sensitivities), median(with_sensitivities) / unit);
     if (runs_only) return 0;
+    if (threads_only) {
+      const int cores = usable_cores();
+      fmt::print("sigma_y, n with the defaults (4 starts, profiles, design), forward sensitivities\n");
+      fmt::print("{:>7} {:>8} {:>6} {:>7}  {}\n", "threads", "wall_s", "runs", "coarse",
+                 "forecast of the remaining time / the time that remained, at 1/4, 1/2, 3/4 of the fit");
+      double one_thread = 0.0;
+      for (const int threads : {1, cores}) {
+        FitProblem problem;
+        problem.free = free_parameters(truth, {MaterialParameter::yield_stress, MaterialParameter::n});
+        FitData started = data;
+        for (const auto& f : problem.free)
+          set_value(started.load_case.material, f.parameter, 2.0 * value_of(truth.material, f.parameter));
+        validate(started.load_case);
+        problem.data.push_back(started);
+        problem.settings.threads = threads;
+        std::vector<std::pair<double, double>> forecasts;  // (elapsed, remaining forecast)
+        problem.settings.on_iteration = [&](const FitProgress& p) {
+          forecasts.emplace_back(p.elapsed_seconds, p.remaining_seconds);
+        };
+        const FitResult r = fit(problem);
+        std::string ratios;
+        for (const double fraction : {0.25, 0.5, 0.75}) {
+          const double at = fraction * r.wall_seconds;
+          const auto f = std::find_if(forecasts.begin(), forecasts.end(), [&](const auto& e) { return e.first >= at; });
+          if (f == forecasts.end()) continue;
+          ratios += fmt::format("  {:.0f}/{:.0f} s ({:.2f})", f->second, r.wall_seconds - f->first,
+                                f->second / (r.wall_seconds - f->first));
+        }
+        if (threads == 1) one_thread = r.wall_seconds;
+        fmt::print("{:>7} {:>8.1f} {:>6} {:>7} {}\n", threads, r.wall_seconds, r.forward_runs, r.coarse_runs, ratios);
+        std::fflush(stdout);
+        if (threads == cores && cores > 1)
+          fmt::print("{} threads: {:.2f}x faster than 1\n", cores, one_thread / r.wall_seconds);
+        if (cores == 1) break;
+      }
+      return 0;
+    }
 
     fmt::print("{:<16} {:<14} {:<13} {:>5} {:>7} {:>5} {:>8} {:>9} {:>6}  {}\n", "free", "gradients", "levels", "runs",
                "coarse", "iter", "wall_s", "wall/run", "cond", "result (+- standard error; truth 210 GPa, 500 MPa, 0.15)");

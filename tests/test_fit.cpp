@@ -490,15 +490,15 @@ TEST(Fit, AStoppedFitResumedFromItsCheckpointEndsWhereTheWholeFitEnds) {
   EXPECT_GE(resumed.coarse_runs, last.coarse_runs);  // the counters go on from the checkpoint's
 }
 
-// Starts side by side (two threads) are the starts one after another: each start's runs are its
-// own, so every outcome, the answer and the runs counted are the same, bit for bit.  Stopped with
-// both starts in progress, the checkpoint holds both, and the resumed fit ends where it would have.
-TEST(Fit, StartsSideBySideEndWhereStartsOneAfterAnotherEnd) {
+// Starts and profile sides side by side (two threads) are the same solves one after another: each
+// solve's runs are its own, so every outcome, the answer, its intervals and the runs counted are
+// the same, bit for bit.  Stopped with two starts in progress, the checkpoint holds both, and the
+// resumed fit ends where it would have.
+TEST(Fit, SolvesSideBySideEndWhereSolvesOneAfterAnotherEnd) {
   FitProblem problem = load_unload_problem();
   const std::vector<FreeParameter>& free = problem.free;
-  problem.settings.starts = 3;
+  problem.settings.starts = 2;
   problem.settings.mesh_refinements = 0;
-  problem.settings.profile = false;
   problem.settings.design_experiments = false;
   problem.settings.threads = 1;
   const FitResult one_after_another = fit(problem);
@@ -510,6 +510,11 @@ TEST(Fit, StartsSideBySideEndWhereStartsOneAfterAnotherEnd) {
     EXPECT_EQ(side_by_side.starts[k].iterations, one_after_another.starts[k].iterations) << "start " << k;
   }
   EXPECT_EQ(side_by_side.values, one_after_another.values);
+  for (std::size_t j = 0; j < free.size(); ++j) {
+    EXPECT_TRUE(side_by_side.determination[j].profiled) << key_of(free[j].parameter);
+    EXPECT_EQ(side_by_side.determination[j].lower, one_after_another.determination[j].lower) << key_of(free[j].parameter);
+    EXPECT_EQ(side_by_side.determination[j].upper, one_after_another.determination[j].upper) << key_of(free[j].parameter);
+  }
   EXPECT_EQ(side_by_side.forward_runs, one_after_another.forward_runs);
   EXPECT_EQ(side_by_side.coarse_runs, one_after_another.coarse_runs);
   EXPECT_EQ(side_by_side.iterations, one_after_another.iterations);

@@ -204,9 +204,11 @@ private:
 /// profiles use -- and "refined"); a run on meshes not yet timed is taken as 6 on meshes with
 /// half their contact nodes (a quarter of the unknowns; docs/performance.md).  What is still to
 /// come is counted in runs: a start as many as the finished starts of its phase took (10 before
-/// one has finished), shared among the threads; a polish 6; each side of a profile 8; the
-/// model's own error one run per data set with twice its contact nodes; the design table 5
-/// candidates of one run (p + 1 with finite differences).  A refinement for the model's error is
+/// one has finished); a polish 4 iterations, each side of a profile 3, at the runs per iteration
+/// measured (before any: 1 with sensitivities, p + 1 with finite differences); starts and
+/// profile sides shared among the threads; the model's own error one run per data set with
+/// twice its contact nodes; the design table 5 candidates of one run (p + 1 with finite
+/// differences).  A refinement for the model's error is
 /// counted once it is decided.  A solve's remaining runs are not known before it converges: the
 /// forecast is a guide, measured against the actual remaining time in docs/performance.md.
 class FitForecast {
@@ -219,13 +221,16 @@ public:
         data_sets_(static_cast<double>(data_sets)),
         coarse_first_(coarse_first),
         profile_(profile),
-        design_runs_(design ? 5.0 * (sensitivities ? 1.0 : static_cast<double>(parameters) + 1.0) : 0.0) {}
+        design_runs_(design ? 5.0 * (sensitivities ? 1.0 : static_cast<double>(parameters) + 1.0) : 0.0),
+        runs_per_iteration_prior_(sensitivities ? 1.0 : static_cast<double>(parameters) + 1.0) {}
 
-  /// A solve ended: its runs and wall seconds, on the meshes of `level`.
-  void solve_ended(const std::string& phase, int runs, double seconds) {
+  /// A solve ended: its runs, iterations and wall seconds, on the meshes of its phase.
+  void solve_ended(const std::string& phase, int runs, int iterations, double seconds) {
     Pace& pace = paces_[level_of(phase)];
     pace.runs += runs;
     pace.seconds += seconds;
+    runs_of_solves_ += runs;
+    iterations_of_solves_ += iterations;
     if (phase == "coarse" || phase == "fine") {
       ++finished_starts_;
       runs_of_finished_starts_ += runs;
@@ -250,6 +255,10 @@ public:
     if (coarse == 0.0) coarse = fine / 6.0;
     if (refined == 0.0) refined = 6.0 * fine;
     const double on_level = phase == "coarse" ? coarse : phase == "refined" ? refined : fine;
+    const double per_iteration = iterations_of_solves_ > 0 ? std::max(1.0, static_cast<double>(runs_of_solves_) / iterations_of_solves_)
+                                                           : runs_per_iteration_prior_;
+    const double side_runs = 3.0 * per_iteration, polish_runs = 4.0 * per_iteration;
+    const double profile_threads = std::min(static_cast<double>(threads_), 2.0 * parameters_);
     const double left_of_solve = [&] {
       if (phase == "coarse" || phase == "fine") {
         // The phase's starts not yet finished (this one among them), their runs so far subtracted.
@@ -259,21 +268,23 @@ public:
         const double parallel = std::min(static_cast<double>(threads_), starts_left);
         return std::max(1.0, starts_left * per_start - runs * parallel) / parallel;
       }
-      if (phase == "profile") {
+      if (phase == "profile") {  // the sides after this one, shared among the threads
         const int side = (index / 100) % 10, parameter = index / 1000 - 1;
-        const double sides_after = std::max(0.0, 2.0 * parameters_ - (2.0 * parameter + side) - 1.0);
-        return std::max(1.0, 8.0 - runs) + 8.0 * sides_after;
+        const double sides_after = std::max(0.0, 2.0 * parameters_ - (2.0 * parameter + side) - profile_threads);
+        return std::max(1.0, side_runs - runs) + side_runs * sides_after / profile_threads;
       }
-      return std::max(1.0, 6.0 - runs);  // a polish, here or refined
+      return std::max(1.0, polish_runs - runs);  // a polish, here or refined, or the corrected optimum
     }();
     double later = 0.0;
-    const double profiles = profile_ ? 2.0 * parameters_ * 8.0 * fine : 0.0;
+    const double profiles = profile_ ? 2.0 * parameters_ * side_runs / profile_threads * fine : 0.0;
+    const double polish = polish_runs * fine;
     // The model's own error: one run per data set with twice the contact nodes of the meshes.
-    if (phase == "coarse") later = 6.0 * fine + data_sets_ * refined + profiles + design_runs_ * fine;
-    else if (phase == "fine") later = (coarse_first_ ? 0.0 : 6.0 * fine) + data_sets_ * refined + profiles + design_runs_ * fine;
+    if (phase == "coarse") later = polish + data_sets_ * refined + profiles + design_runs_ * fine;
+    else if (phase == "fine") later = (coarse_first_ ? 0.0 : polish) + data_sets_ * refined + profiles + design_runs_ * fine;
     else if (phase == "polish") later = data_sets_ * refined + profiles + design_runs_ * fine;
     else if (phase == "profile") later = design_runs_ * fine;
     else if (phase == "refined") later = data_sets_ * 6.0 * refined + design_runs_ * refined;
+    else if (phase == "corrected") later = design_runs_ * fine;
     return left_of_solve * on_level + later;
   }
 
@@ -288,8 +299,9 @@ private:
   int starts_, threads_;
   double parameters_, data_sets_;
   bool coarse_first_, profile_;
-  double design_runs_;
+  double design_runs_, runs_per_iteration_prior_;
   std::map<std::string, Pace> paces_;
+  int runs_of_solves_ = 0, iterations_of_solves_ = 0;
   int finished_starts_ = 0, runs_of_finished_starts_ = 0;
 };
 
@@ -711,7 +723,7 @@ FitResult fit(const FitProblem& problem) {
     // A solve a stop request ended is not finished: the checkpoint keeps its last accepted point.
     if (!interruption_requested()) {
       const std::lock_guard<std::mutex> lock(fit_mutex);
-      forecast.solve_ended(phase, runs_of() - runs_before, seconds_of_solve());
+      forecast.solve_ended(phase, runs_of() - runs_before, iterations, seconds_of_solve());
       running.erase({phase, start_index});
       solved.push_back(outcome);
       finished_iterations += outcome.iterations;
@@ -727,26 +739,25 @@ FitResult fit(const FitProblem& problem) {
   // optimum moves by the coarse mesh's discretization error, which along a poorly determined
   // combination is a few standard errors).  Should the coarse phase or the polish find nothing
   // (every run refused or failed), the starts run on the fine meshes as without it.
-  // The starts are independent: they run side by side on `threads` threads, each with its own
-  // cost functions over the level's forward models (ForwardModel::evaluate is const; each run is
-  // its own single-threaded Simulation: worker_threads.hpp).  Start k goes to thread k mod
-  // threads, the first start to this thread's cost functions (which hold the magnitude check's
-  // evaluation), and the outcomes are kept in start order: they do not depend on the threads.
-  const auto run_starts = [&](const Level& level, const std::string& phase, std::atomic<int>& runs) {
-    std::vector<Costs> own(static_cast<std::size_t>(threads));
-    for (int w = 1; w < threads; ++w)
+  // Independent solves (the starts of a phase, the sides of the profiles) run side by side on
+  // `threads` threads, each thread with its own cost functions over the level's forward models
+  // (ForwardModel::evaluate is const; each run is its own single-threaded Simulation:
+  // worker_threads.hpp).  Task k goes to thread k mod threads, task 0 to this thread with the
+  // level's own cost functions (which hold the magnitude check's evaluation), and each task's
+  // solves depend on the task alone: the outcomes do not depend on the threads.
+  const auto side_by_side = [&](const Level& level, std::atomic<int>& runs, int tasks,
+                                const std::function<void(int, const Costs&)>& task) {
+    const int used = std::clamp(threads, 1, std::max(1, tasks));
+    std::vector<Costs> own(static_cast<std::size_t>(used));
+    for (int w = 1; w < used; ++w)
       for (const auto& model : level.models)
         own[static_cast<std::size_t>(w)].push_back(std::make_unique<DataSetResiduals>(*model, scale, runs, failures));
-    std::vector<std::optional<StartOutcome>> outcomes(static_cast<std::size_t>(starts));
     const auto run_share = [&](int w) {
       const Costs& costs = w == 0 ? level.costs : own[static_cast<std::size_t>(w)];
-      for (int k = w; k < starts && !interruption_requested(); k += threads) {
-        const std::vector<double> start = k == 0 ? case_start : spread_start(k, problem.free);
-        outcomes[static_cast<std::size_t>(k)] = solve_from(costs, phase, start, k + 1, problem.settings.max_iterations);
-      }
+      for (int k = w; k < tasks && !interruption_requested(); k += used) task(k, costs);
     };
     std::vector<std::future<void>> others;
-    for (int w = 1; w < threads; ++w) others.push_back(std::async(std::launch::async, run_share, w));
+    for (int w = 1; w < used; ++w) others.push_back(std::async(std::launch::async, run_share, w));
     std::exception_ptr failure;
     try {
       run_share(0);
@@ -761,6 +772,13 @@ FitResult fit(const FitProblem& problem) {
       }
     }
     if (failure) std::rethrow_exception(failure);
+  };
+  const auto run_starts = [&](const Level& level, const std::string& phase, std::atomic<int>& runs) {
+    std::vector<std::optional<StartOutcome>> outcomes(static_cast<std::size_t>(starts));
+    side_by_side(level, runs, starts, [&](int k, const Costs& costs) {
+      const std::vector<double> start = k == 0 ? case_start : spread_start(k, problem.free);
+      outcomes[static_cast<std::size_t>(k)] = solve_from(costs, phase, start, k + 1, problem.settings.max_iterations);
+    });
     for (auto& o : outcomes)
       if (o) result.starts.push_back(std::move(*o));
     stop_if_interrupted();
@@ -1117,62 +1135,81 @@ FitResult fit(const FitProblem& problem) {
     const std::vector<double> optimum = theta;
     constexpr int profile_iterations = 20;
     if (rise > 0.0 && std::isfinite(rise)) {
-      for (std::size_t j = 0; j < p; ++j) {
-        const FreeParameter& f = problem.free[j];
-        Profile found;
+      // The 2p sides are independent (each starts from the optimum): they run side by side.
+      struct Side {
+        std::vector<std::pair<double, double>> samples;
+        double bound = 0.0, room = 0.0;
         bool failed = false;
-        for (int side = 0; side < 2 && !failed; ++side) {
-          const double sign = side == 0 ? -1.0 : 1.0;
-          const double bound = side == 0 ? f.lower : f.upper;
-          const double room = std::abs(bound - optimum[j]);
-          found.bound[side] = bound;
-          found.room[side] = room;
-          double h = t * result.std_errors[j];
-          if (!(h > 0.0) || !std::isfinite(h)) h = 0.1 * std::abs(optimum[j]);
-          if (!(h > 0.0)) {
-            failed = true;  // nothing to scale a trial by: the linearized interval stands
-            break;
-          }
-          int trial = 0;
-          // Each trial starts where the linearized model puts the others for that value of this
-          // one (the conditional mean, theta_k + cov_kj / cov_jj delta): on the valley, so that
-          // Levenberg-Marquardt needs an iteration or two.  A trial that does not converge is no
-          // profile value (its cost is above the profile's) and is not kept.
-          const auto profile_at = [&](double distance) {
-            std::vector<double> start = optimum;
-            const double delta = sign * distance;
-            const double cjj = result.covariance(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(j));
-            for (std::size_t k = 0; k < p; ++k) {
-              if (k == j || !(cjj > 0.0) || !std::isfinite(cjj)) continue;
-              const double ckj = result.covariance(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(j));
-              if (std::isfinite(ckj))
-                start[k] = std::clamp(optimum[k] + ckj / cjj * delta, problem.free[k].lower, problem.free[k].upper);
-            }
-            start[j] = distance >= room ? bound : optimum[j] + delta;  // exactly on the bound: feasible
-            ++trial;
-            const int index = 1000 * static_cast<int>(j + 1) + 100 * side + trial;
-            StartOutcome o = solve_from(fine->costs, "profile", start, index, profile_iterations, static_cast<int>(j));
-            stop_if_interrupted();
-            if (!std::isfinite(o.cost) || !o.converged) return std::numeric_limits<double>::quiet_NaN();
-            found.samples[side].emplace_back(distance, o.cost - best_cost);
-            return o.cost - best_cost;
-          };
-          // With p = 1 the "profile" is the cost itself: a solve with its only parameter held
-          // evaluates it.  A trial's excess predicts the crossing at distance sqrt(rise / excess).
-          double distance = std::min(h, room), excess = profile_at(distance);
-          for (int widening = 0; std::isfinite(excess) && excess < rise && distance < room && widening < 4; ++widening) {
-            distance = std::min(room, excess > 0.0 ? 1.2 * distance * std::sqrt(rise / excess) : 2.0 * distance);
-            excess = profile_at(distance);
-          }
-          if (!std::isfinite(excess)) {
-            failed = true;
-            break;
-          }
-          if (excess > 2.0 * rise)  // far past the crossing: a trial at the prediction brackets it
-            profile_at(distance * std::sqrt(rise / excess));
+      };
+      std::vector<Side> sides(2 * p);
+      const auto trace_side = [&](std::size_t j, int side, const Costs& costs) {
+        const FreeParameter& f = problem.free[j];
+        Side& found = sides[2 * j + static_cast<std::size_t>(side)];
+        const double sign = side == 0 ? -1.0 : 1.0;
+        const double bound = side == 0 ? f.lower : f.upper;
+        const double room = std::abs(bound - optimum[j]);
+        found.bound = bound;
+        found.room = room;
+        double h = t * result.std_errors[j];
+        if (!(h > 0.0) || !std::isfinite(h)) h = 0.1 * std::abs(optimum[j]);
+        if (!(h > 0.0)) {
+          found.failed = true;  // nothing to scale a trial by: the linearized interval stands
+          return;
         }
-        if (failed) continue;  // the linearized interval stands
+        int trial = 0;
+        // Each trial starts where the linearized model puts the others for that value of this
+        // one (the conditional mean, theta_k + cov_kj / cov_jj delta): on the valley, so that
+        // Levenberg-Marquardt needs an iteration or two.  A trial that does not converge is no
+        // profile value (its cost is above the profile's) and is not kept.
+        const auto profile_at = [&](double distance) {
+          std::vector<double> start = optimum;
+          const double delta = sign * distance;
+          const double cjj = result.covariance(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(j));
+          for (std::size_t k = 0; k < p; ++k) {
+            if (k == j || !(cjj > 0.0) || !std::isfinite(cjj)) continue;
+            const double ckj = result.covariance(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(j));
+            if (std::isfinite(ckj))
+              start[k] = std::clamp(optimum[k] + ckj / cjj * delta, problem.free[k].lower, problem.free[k].upper);
+          }
+          start[j] = distance >= room ? bound : optimum[j] + delta;  // exactly on the bound: feasible
+          ++trial;
+          const int index = 1000 * static_cast<int>(j + 1) + 100 * side + trial;
+          const StartOutcome o = solve_from(costs, "profile", start, index, profile_iterations, static_cast<int>(j));
+          if (interruption_requested() || !std::isfinite(o.cost) || !o.converged)
+            return std::numeric_limits<double>::quiet_NaN();
+          found.samples.emplace_back(distance, o.cost - best_cost);
+          return o.cost - best_cost;
+        };
+        // With p = 1 the "profile" is the cost itself: a solve with its only parameter held
+        // evaluates it.  A trial's excess predicts the crossing at distance sqrt(rise / excess).
+        double distance = std::min(h, room), excess = profile_at(distance);
+        for (int widening = 0; std::isfinite(excess) && excess < rise && distance < room && widening < 4; ++widening) {
+          distance = std::min(room, excess > 0.0 ? 1.2 * distance * std::sqrt(rise / excess) : 2.0 * distance);
+          excess = profile_at(distance);
+        }
+        if (!std::isfinite(excess)) {
+          found.failed = true;
+          return;
+        }
+        if (excess > 2.0 * rise)  // far past the crossing: a trial at the prediction brackets it
+          profile_at(distance * std::sqrt(rise / excess));
+      };
+      side_by_side(*fine, forward_runs, static_cast<int>(2 * p), [&](int k, const Costs& costs) {
+        trace_side(static_cast<std::size_t>(k) / 2, k % 2, costs);
+      });
+      stop_if_interrupted();
+      for (std::size_t j = 0; j < p; ++j) {
+        const Side& below = sides[2 * j];
+        const Side& above = sides[2 * j + 1];
+        if (below.failed || above.failed) continue;  // the linearized interval stands
+        Profile found;
         found.found = true;
+        found.samples[0] = below.samples;
+        found.samples[1] = above.samples;
+        found.bound[0] = below.bound;
+        found.bound[1] = above.bound;
+        found.room[0] = below.room;
+        found.room[1] = above.room;
         profiles[j] = std::move(found);
       }
     }
