@@ -745,16 +745,12 @@ FitResult fit(const FitProblem& problem) {
   // worker_threads.hpp).  Task k goes to thread k mod threads, task 0 to this thread with the
   // level's own cost functions (which hold the magnitude check's evaluation), and each task's
   // solves depend on the task alone: the outcomes do not depend on the threads.
-  const auto side_by_side = [&](const Level& level, std::atomic<int>& runs, int tasks,
-                                const std::function<void(int, const Costs&)>& task) {
+  // Tasks 0..tasks-1 on `threads` threads, task k on thread k mod threads (0: this one), and
+  // the first exception of any rethrown here once all have ended.
+  const auto parallel_for = [&](int tasks, const std::function<void(int thread, int task)>& task) {
     const int used = std::clamp(threads, 1, std::max(1, tasks));
-    std::vector<Costs> own(static_cast<std::size_t>(used));
-    for (int w = 1; w < used; ++w)
-      for (const auto& model : level.models)
-        own[static_cast<std::size_t>(w)].push_back(std::make_unique<DataSetResiduals>(*model, scale, runs, failures));
     const auto run_share = [&](int w) {
-      const Costs& costs = w == 0 ? level.costs : own[static_cast<std::size_t>(w)];
-      for (int k = w; k < tasks && !interruption_requested(); k += used) task(k, costs);
+      for (int k = w; k < tasks && !interruption_requested(); k += used) task(w, k);
     };
     std::vector<std::future<void>> others;
     for (int w = 1; w < used; ++w) others.push_back(std::async(std::launch::async, run_share, w));
@@ -772,6 +768,14 @@ FitResult fit(const FitProblem& problem) {
       }
     }
     if (failure) std::rethrow_exception(failure);
+  };
+  const auto side_by_side = [&](const Level& level, std::atomic<int>& runs, int tasks,
+                                const std::function<void(int, const Costs&)>& task) {
+    std::vector<Costs> own(static_cast<std::size_t>(std::clamp(threads, 1, std::max(1, tasks))));
+    for (std::size_t w = 1; w < own.size(); ++w)
+      for (const auto& model : level.models)
+        own[w].push_back(std::make_unique<DataSetResiduals>(*model, scale, runs, failures));
+    parallel_for(tasks, [&](int w, int k) { task(k, w == 0 ? level.costs : own[static_cast<std::size_t>(w)]); });
   };
   const auto run_starts = [&](const Level& level, const std::string& phase, std::atomic<int>& runs) {
     std::vector<std::optional<StartOutcome>> outcomes(static_cast<std::size_t>(starts));
@@ -1541,7 +1545,9 @@ FitResult fit(const FitProblem& problem) {
           fmt::format("the residual imprint after unloading from {:.3g} m to 0, 12 radii to {:.3g} m", deepest, radii.back()),
           with_path(at, {0.0, deepest, 0.0}), FitDataKind::imprint_profile, radii, false);
     }
-    for (Candidate& c : candidates) {
+    // The candidates are independent runs: side by side, reported in their order.
+    parallel_for(static_cast<int>(candidates.size()), [&](int, int k) {
+      Candidate& c = candidates[static_cast<std::size_t>(k)];
       try {
         const ForwardModel model(c.data, parameters, bounds, problem.settings.finite_differences, theta);
         const ModelEvaluation e = model.evaluate(theta, true);
@@ -1573,8 +1579,9 @@ FitResult fit(const FitProblem& problem) {
       } catch (const std::exception& failure) {  // a candidate the scene cannot make: said, not fatal
         c.report.failure = failure.what();
       }
-      result.experiment_design.push_back(std::move(c.report));
-    }
+    });
+    stop_if_interrupted();
+    for (Candidate& c : candidates) result.experiment_design.push_back(std::move(c.report));
   };
 
   // The verdict: a misfit beyond poor_fit_rms_limit, or a parameter at a bound, is a poor fit.
