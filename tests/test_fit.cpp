@@ -585,6 +585,7 @@ TEST_F(FitCli, BadProblemsExitTwoNamingTheKeyBeforeAnyRun) {
   expect_refused(fit_args("--free material.n --bounds material.E=1e9:1e12"), "material.E");  // bounds of a fixed one
   expect_refused(fit_args("--free material.e0,material.yield_stress"), "material.yield_stress");
   expect_refused(fit_args(""), "--free");
+  expect_refused(fit_args("--free material.n --threads 0"), "--threads");
   expect_refused("fit " + (dir_ / "case.toml").string() + " --free material.n", "--data");
   // Data deeper than the case's load path, and fewer points than parameters.
   std::ofstream(dir_ / "deep.csv") << "alpha,P\n1e-5,1\n1e-4,2\n";

@@ -217,7 +217,7 @@ class Run(Temporary):
                 "--mesh-refinements", "0", "--out", self.path("fit_cli"), "--no-plot", "--quiet")
         self.assertEqual(p.returncode, 0, p.stderr)
         fitted = indentsim.fit(started, data=data, free=["material.E"], bounds={"material.E": (50e9, 500e9)},
-                               mesh_refinements=0, out=self.path("fit_py"))
+                               mesh_refinements=0, threads=1, out=self.path("fit_py"))
         with open(self.path("fit_cli", "fit.json")) as f:
             by_cli = json.load(f)
         value = lambda j: j["parameters"]["material.E"]["value"]
@@ -528,6 +528,9 @@ class CaseValues(Temporary):
         with self.assertRaises(indentsim.InputError) as caught:
             indentsim.fit(self.base, data=data, free="material.E", starts="3")
         self.assertEqual(str(caught.exception), "starts: must be an integer (got '3')")
+        with self.assertRaises(indentsim.InputError) as caught:
+            indentsim.fit(self.base, data=data, free="material.E", threads=2.0)
+        self.assertEqual(str(caught.exception), "threads: must be an integer (got 2.0)")
         with self.assertRaises(indentsim.InputError) as caught:
             indentsim.fit(self.base, data=data, free="material.E", bounds={"material.E": 5e9})
         self.assertIn("bounds: material.E: expects (lower, upper)", str(caught.exception))
