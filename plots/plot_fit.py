@@ -118,6 +118,13 @@ def plot_confidence(ax, fit, size):
                 a, b = get()
                 a, b = min(a, lo), max(b, hi)
                 set_(a - 0.06 * (b - a), b + 0.06 * (b - a))
+        # Where the model's error exceeded the noise: the optimum with that error taken off, the
+        # end of the shift the interval holds (fit.json's values_with_the_model_error_taken_off).
+        corrected = fit.get("values_with_the_model_error_taken_off")
+        if corrected:
+            ax.plot(xu(corrected[i]), yu(corrected[j]), "x", color=ip.UNLOADING, ms=plt.rcParams["lines.markersize"] * 2,
+                    mew=2, linestyle="none", label="with the model's own error taken off")
+            ax.legend(loc="best")
         ax.plot(xu(centre[0]), yu(centre[1]), "+", color=ip.BLACK, ms=plt.rcParams["lines.markersize"] * 2.5, mew=2)
         ax.set_xlabel(xi)
         ax.set_ylabel(yi)
