@@ -82,10 +82,13 @@ int expect_honest(const FitResult& r, const LoadCase& truth, const std::vector<F
 
 /// The truth's curve made on a mesh `factor` times finer than the fit's (its contact nodes):
 /// the model's own discretization error is then in the data as nature's would be.
+/// (and, for a path-dependent model, `increments_factor` times the increments).
 FitData data_on_a_finer_mesh(LoadCase truth, FitDataKind kind, const std::vector<double>& abscissa,
-                             const std::vector<FreeParameter>& free, double noise, unsigned seed, int factor = 3) {
+                             const std::vector<FreeParameter>& free, double noise, unsigned seed, int factor = 3,
+                             int increments_factor = 1) {
   const LoadCase fit_case = truth;
   truth.mesh.contact_nodes *= factor;
+  truth.load.multiply_increments(increments_factor);
   validate(truth);
   FitData d = synthetic_data(truth, kind, abscissa, free, noise, seed);
   d.load_case = fit_case;
@@ -171,6 +174,28 @@ TEST(Fit, PlaneStrainCylinderAndWedgeGiveYieldStressAndHardeningBack) {
   print(r, problem.free);
   const int determined = expect_honest(r, sphere(SceneKind::plane_strain), problem.free);
   std::printf("determined: %d of 2\n", determined);
+}
+
+// J2 flow theory carries its history, so its curve depends on the increments as well as the mesh:
+// data made on a mesh three times finer with four times the increments, fitted with the case's own,
+// must have both shares of the model's error in the interval (the increments' estimated, not 0).
+TEST(Fit, AJ2FitCarriesTheErrorOfItsIncrementsIntoItsInterval) {
+  LoadCase truth = sphere(SceneKind::plane_strain);
+  truth.material.model = MaterialModel::j2;
+  truth.load.increments = 10;
+  validate(truth);
+  FitProblem problem;
+  problem.free = {yield_and_hardening[0]};
+  problem.settings.starts = 2;
+  problem.settings.design_experiments = false;
+  FitData d = data_on_a_finer_mesh(truth, FitDataKind::force_depth_curve, depths(20e-6, 10), problem.free, 0.005, 5, 3, 4);
+  d.load_case = started_away(truth, problem.free, 1.5);
+  problem.data.push_back(d);
+  const FitResult r = fit(problem);
+  print(r, problem.free);
+  EXPECT_EQ(r.data[0].gradients, "finite differences (J2 flow theory carries its history)");
+  EXPECT_NE(r.determination[0].model_shift_increments, 0.0);
+  expect_honest(r, truth, problem.free);
 }
 
 // The profile likelihood where the model is nearly linear in its parameter: one parameter

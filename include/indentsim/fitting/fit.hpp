@@ -161,7 +161,7 @@ struct ParameterDetermination {
   /// estimate's accuracy.  0 where no estimate could be made (model_error_estimated).
   double model_shift = 0.0;
   /// The increments' share of model_shift, for a path-dependent model (J2, friction): estimated
-  /// from the same mesh with twice the increments (Richardson, order 1); 0 for the others.
+  /// from the same mesh with four times the increments (Richardson, order 1); 0 for the others.
   double model_shift_increments = 0.0;
   /// The standard error of noise and model together: sqrt(std_error^2 + model_shift^2).
   double total_std_error = 0.0;
