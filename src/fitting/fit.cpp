@@ -508,7 +508,7 @@ FitResult fit(const FitProblem& problem) {
   // checkpoint, the progress line -- is changed under this lock.
   std::mutex fit_mutex;
   const int starts = std::max(1, problem.settings.starts);
-  const int threads = std::clamp(problem.settings.threads > 0 ? problem.settings.threads : usable_cores(), 1, starts);
+  const int threads = std::max(1, problem.settings.threads > 0 ? problem.settings.threads : usable_cores());
   const auto warn = [&](std::string warning) {
     if (problem.settings.on_warning) problem.settings.on_warning(warning);
     result.warnings.push_back(std::move(warning));
