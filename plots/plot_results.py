@@ -357,7 +357,9 @@ def plot_plastic_zone(case, summary, row, fields, units, size, outdir, deepest=N
     xy, deformed, quads = fields["xy"], fields["deformed"], fields["quads"]
     scene = Scene(case)
     model = case["material"]["model"]
-    e0 = case["material"].get("e0")
+    # e0: the case's, or sigma_y / (3 mu) of a flow-curve law (swift, table) that states no e0.
+    e0 = summary.get("material", {}).get("e0") if summary else None
+    e0 = e0 or case["material"].get("e0")
     scale = e0 if e0 else 1.0
     a = max(float(row["a"]), 1e-300)
     nx, ny = structured(xy)

@@ -668,7 +668,7 @@ int main(int argc, char** argv) {
              "file with [[data]] tables; writes DIR/fit.json, fit_curves.csv, fitted_case.toml, fit.png");
   fit->add_option("input", fit_options.input, "load case (with --data) or fit file (TOML)")->required();
   fit->add_option("--data", fit_options.data_files, "the measured curve (CSV: alpha [m], P [N] unless told)");
-  fit->add_option("--free", fit_options.free, "parameters to fit: material.E, .nu, .e0 or .yield_stress, .kappa, .n")
+  fit->add_option("--free", fit_options.free, "parameters to fit: material.E, .nu, .e0 or .yield_stress, .kappa, .n, .K, .prestrain, .Q, .b")
       ->delimiter(',');
   fit->add_option("--bounds", fit_options.bounds, "bounds of one parameter: material.n=0.01:0.6 (repeat)");
   fit->add_option("--starts", fit_options.starts,

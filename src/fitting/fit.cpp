@@ -331,7 +331,10 @@ const char* si_force_unit(const FitData& d) { return d.load_case.geometry.kind =
 
 /// The key's unit for messages (" Pa" for E and sigma_y).
 std::string unit_suffix(MaterialParameter p) {
-  return p == MaterialParameter::E || p == MaterialParameter::yield_stress ? " Pa" : "";
+  return p == MaterialParameter::E || p == MaterialParameter::yield_stress || p == MaterialParameter::K ||
+                 p == MaterialParameter::Q
+             ? " Pa"
+             : "";
 }
 
 void check_problem(const FitProblem& problem) {
@@ -403,15 +406,7 @@ void check_problem(const FitProblem& problem) {
                                    "inside them (in the load case, or with --set) or widen them (--bounds {}=lower:upper)",
                                    start, unit, f.lower, f.upper, unit, key));
     for (const auto& d : problem.data) {
-      const MaterialInput& m = d.load_case.material;
-      const bool plastic_parameter = f.parameter == MaterialParameter::e0 || f.parameter == MaterialParameter::yield_stress ||
-                                     f.parameter == MaterialParameter::kappa || f.parameter == MaterialParameter::n;
-      if (plastic_parameter && m.model == MaterialModel::elastic)
-        throw InputError(d.load_case.source, key, "has no effect: material.model is \"elastic\"");
-      if (f.parameter == MaterialParameter::kappa && m.hardening != HardeningLaw::linear)
-        throw InputError(d.load_case.source, key, "is the linear law's: this case has material.hardening = \"power\" (free material.n)");
-      if (f.parameter == MaterialParameter::n && m.hardening != HardeningLaw::power)
-        throw InputError(d.load_case.source, key, "is the power law's: this case has material.hardening = \"linear\" (free material.kappa)");
+      if (const auto why = inapplicable(d.load_case.material, f.parameter)) throw InputError(d.load_case.source, key, *why);
     }
   }
   if (points < problem.free.size())

@@ -277,18 +277,34 @@ const std::vector<KeyDeclaration>& key_declarations() {
     }
     k.push_back(number_key({"material", "nu", "number", "(-1, 0.5)", "", "Poisson's ratio", true},
                            [](auto& c) -> auto& { return c.material.nu; }));
-    k.push_back(number_key({"material", "e0", "number", "[1e-9, 1)", "",
-                            "elastic limit of the strain intensity e_u; the uniaxial yield stress is sigma_y = 3 mu e0 "
-                            "= E e0 3 / (2 (1 + nu)) (give e0 or yield_stress, not both)"},
-                           [](auto& c) -> auto& { return c.material.e0; },
-                           ": a strain (solids yield at 1e-5 to 1e-1; below 1e-9 the law's ratio e_u / e0 leaves "
-                           "double precision)"));
+    {
+      KeyDeclaration e0 = number_key({"material", "e0", "number", "[1e-9, 1)", "",
+                                      "elastic limit of the strain intensity e_u; the uniaxial yield stress is sigma_y = "
+                                      "3 mu e0 = E e0 3 / (2 (1 + nu)) (give e0 or yield_stress, not both; not for "
+                                      "swift and table, whose curve starts at its own yield stress)"},
+                                     [](auto& c) -> auto& { return c.material.e0; },
+                                     ": a strain (solids yield at 1e-5 to 1e-1; below 1e-9 the law's ratio e_u / e0 "
+                                     "leaves double precision)");
+      const auto write = e0.write;
+      e0.write = [write](const LoadCase& lc) -> std::optional<std::string> {
+        if (lc.material.hardening == HardeningLaw::swift || lc.material.hardening == HardeningLaw::table)
+          return std::nullopt;
+        return write(lc);
+      };
+      k.push_back(e0);
+    }
     {
       KeyDeclaration ys{"material", "yield_stress", "number", "> 0", "Pa",
                         "uniaxial yield stress sigma_y, instead of e0 (e0 = sigma_y / (3 mu))"};
       ys.read = [](const Reader& r, LoadCase& lc) { r.read_optional_number("material", "yield_stress", lc.material.yield_stress); };
       ys.write = [](const LoadCase& lc) -> std::optional<std::string> {
-        return toml_number(lc.material.yield_stress.value_or(yield_stress_of_e0(lc.material.e0, lc.material.E, lc.material.nu)));
+        const auto& m = lc.material;
+        // swift and table start at their own curve's yield stress (shown, as derived).
+        if (m.hardening == HardeningLaw::swift && m.K && m.prestrain)
+          return toml_number(*m.K * std::pow(*m.prestrain, m.n));
+        if (m.hardening == HardeningLaw::table && !m.hardening_points.empty())
+          return toml_number(m.hardening_points.front().second);
+        return toml_number(m.yield_stress.value_or(yield_stress_of_e0(m.e0, m.E, m.nu)));
       };
       ys.derived = true;
       ys.default_words = "from e0";
@@ -300,13 +316,111 @@ const std::vector<KeyDeclaration>& key_declarations() {
       k.push_back(ys);
     }
     k.push_back(choice_key({"material", "hardening", "choice", "", "",
-                            "linear: omega = kappa (1 - e0/e_u); power: omega = 1 - (e0/e_u)^(1-n)"},
+                            "Ilyushin's omega(e_u), both models -- linear: omega = kappa (1 - e0/e_u); power: omega = "
+                            "1 - (e0/e_u)^(1-n).  A tensile test's flow stress sigma(eps_p), j2 only -- power_law: "
+                            "sigma_y (1 + E eps_p / sigma_y)^n; ludwik: sigma_y + K eps_p^n; swift: K (prestrain + "
+                            "eps_p)^n; voce: sigma_y + Q (1 - exp(-b eps_p)); table: hardening_table's points"},
                            hardening_names, [](auto& c) -> auto& { return c.material.hardening; }));
     k.push_back(number_key({"material", "kappa", "number", "[0, 1)", "",
                             "linear law: post-yield slope of sigma_u(e_u) is (1 - kappa) 3 mu"},
                            [](auto& c) -> auto& { return c.material.kappa; }));
-    k.push_back(number_key({"material", "n", "number", "(0, 1)", "", "power law: sigma_u grows as e_u^n beyond e0"},
+    k.push_back(number_key({"material", "n", "number", "[0, 1)", "",
+                            "hardening exponent -- power: sigma_u grows as e_u^n beyond e0 (n > 0); power_law, swift "
+                            "(n = 0: perfectly plastic), ludwik (n > 0)"},
                            [](auto& c) -> auto& { return c.material.n; }));
+    // The flow-stress laws' own parameters: written to case.toml only under their law, required
+    // there (check_hardening_keys), refused under another.
+    const auto law_number = [&](KeyDeclaration d, auto access, std::initializer_list<HardeningLaw> laws,
+                                const char* needed_by) {
+      const std::vector<HardeningLaw> users(laws);
+      KeyDeclaration key = optional_number_key(std::move(d), access);
+      key.write = [=](const LoadCase& lc) -> std::optional<std::string> {
+        const auto& value = access(lc);
+        if (!value || std::find(users.begin(), users.end(), lc.material.hardening) == users.end()) return std::nullopt;
+        return toml_number(*value);
+      };
+      key.default_words = needed_by;
+      return key;
+    };
+    {
+      const auto K = [](auto& c) -> auto& { return c.material.K; };
+      KeyDeclaration d = law_number({"material", "K", "number", "> 0", "Pa",
+                                     "ludwik, swift: the strength coefficient K of sigma_y + K eps_p^n, K (prestrain + "
+                                     "eps_p)^n"},
+                                    K, {HardeningLaw::ludwik, HardeningLaw::swift}, "none: ludwik and swift need it");
+      k.push_back(plausible(std::move(d), 1e5, 3e11, "the strength coefficients of solids", K));
+    }
+    k.push_back(law_number({"material", "prestrain", "number", "(0, 1)", "",
+                            "swift: eps_0, the plastic strain the curve K (eps_0 + eps_p)^n starts from (the initial "
+                            "yield stress is K eps_0^n)"},
+                           [](auto& c) -> auto& { return c.material.prestrain; }, {HardeningLaw::swift},
+                           "none: swift needs it"));
+    {
+      const auto Q = [](auto& c) -> auto& { return c.material.Q; };
+      KeyDeclaration d = law_number({"material", "Q", "number", ">= 0", "Pa",
+                                     "voce: the flow stress saturates at sigma_y + Q"},
+                                    Q, {HardeningLaw::voce}, "none: voce needs it");
+      k.push_back(std::move(d));
+    }
+    k.push_back(law_number({"material", "b", "number", "> 0", "",
+                            "voce: the saturation rate b of sigma_y + Q (1 - exp(-b eps_p))"},
+                           [](auto& c) -> auto& { return c.material.b; }, {HardeningLaw::voce}, "none: voce needs it"));
+    {
+      KeyDeclaration file{"material", "hardening_table", "string", "a CSV file of eps_p, sigma", "Pa",
+                          "table: a tensile test's flow curve, rows eps_p, sigma from eps_p = 0 (sigma there is the "
+                          "yield stress), eps_p increasing, sigma not falling; linear between rows; a header row may "
+                          "lead; relative to the load case's folder"};
+      file.read = [](const Reader& r, LoadCase& lc) {
+        r.read_string("material", "hardening_table", lc.material.hardening_table_file);
+      };
+      file.write = [](const LoadCase& lc) -> std::optional<std::string> {
+        if (lc.material.hardening != HardeningLaw::table || lc.material.hardening_table_file.empty()) return std::nullopt;
+        std::ostringstream text;
+        text << toml::value<std::string>(lc.material.hardening_table_file);
+        return text.str() + " read into hardening_points";
+      };
+      file.derived = true;  // case.toml holds the points themselves: a resumed run needs no file
+      file.default_words = "none: table needs it or hardening_points";
+      k.push_back(file);
+    }
+    {
+      KeyDeclaration points{"material", "hardening_points", "array of [eps_p, sigma] pairs",
+                            "as material.hardening_table", "Pa",
+                            "table: the flow curve's points inline, instead of material.hardening_table (case.toml "
+                            "writes them so)"};
+      points.default_words = "none";
+      points.plausible = KeyDeclaration::Plausible{1e5, 3e10, "the yield stresses of solids (the first point's sigma)"};
+      points.magnitudes = [](const LoadCase& lc) -> std::vector<double> {
+        if (lc.material.hardening != HardeningLaw::table || lc.material.hardening_points.empty()) return {};
+        return {lc.material.hardening_points.front().second};
+      };
+      points.read = [](const Reader& r, LoadCase& lc) {
+        r.read_points("material", "hardening_points", lc.material.hardening_points, "[eps_p, sigma]");
+      };
+      points.write = [](const LoadCase& lc) -> std::optional<std::string> {
+        if (lc.material.hardening != HardeningLaw::table) return std::nullopt;
+        std::string text = "[";
+        for (std::size_t i = 0; i < lc.material.hardening_points.size(); ++i)
+          text += fmt::format("{}[{}, {}]", i ? ", " : "", toml_number(lc.material.hardening_points[i].first),
+                              toml_number(lc.material.hardening_points[i].second));
+        return text + "]";
+      };
+      k.push_back(points);
+    }
+    {
+      KeyDeclaration extension = choice_key({"material", "table_extension", "choice", "", "",
+                                             "table: beyond the last point flat (perfectly plastic) or along the last "
+                                             "segment's slope (last_slope)"},
+                                            table_extension_names,
+                                            [](auto& c) -> auto& { return c.material.table_extension; });
+      const auto write = extension.write;
+      extension.write = [write](const LoadCase& lc) -> std::optional<std::string> {
+        if (lc.material.hardening != HardeningLaw::table) return std::nullopt;
+        return write(lc);
+      };
+      extension.default_words = "flat";
+      k.push_back(extension);
+    }
     {
       const auto path = [](auto& c) -> auto& { return c.load.path; };
       KeyDeclaration d = numbers_key({"load", "path", "array of numbers", "from 0, each >= 0", "m",
@@ -335,7 +449,8 @@ const std::vector<KeyDeclaration>& key_declarations() {
     }
     k.push_back(choice_key({"mesh", "element", "choice", "", "",
                             "q1 (the paper's exact element), bbar (mean dilatation, locking-free), auto (B-bar when "
-                            "nu >= 0.45 or kappa > 0.95 or n < 0.1, or a plastic material under a cone)"},
+                            "nu >= 0.45 or kappa > 0.95 or n < 0.1 or a j2 flow curve (power_law ... table), or a plastic material "
+                            "under a cone)"},
                            element_names, [](auto& c) -> auto& { return c.mesh.element; }));
     k.push_back(integer_key({"mesh", "contact_nodes", "integer", ">= 2", "",
                              "fine-zone elements across the estimated final contact half-width (raise it to buy "

@@ -29,7 +29,12 @@ struct Choice {
 };
 inline constexpr Choice<MaterialModel> model_names[] = {
     {"elastic", MaterialModel::elastic}, {"ilyushin", MaterialModel::ilyushin}, {"j2", MaterialModel::j2}};
-inline constexpr Choice<HardeningLaw> hardening_names[] = {{"linear", HardeningLaw::linear}, {"power", HardeningLaw::power}};
+inline constexpr Choice<HardeningLaw> hardening_names[] = {
+    {"linear", HardeningLaw::linear}, {"power", HardeningLaw::power},   {"power_law", HardeningLaw::power_law},
+    {"ludwik", HardeningLaw::ludwik}, {"swift", HardeningLaw::swift},   {"voce", HardeningLaw::voce},
+    {"table", HardeningLaw::table}};
+inline constexpr Choice<TableExtension> table_extension_names[] = {{"flat", TableExtension::flat},
+                                                                   {"last_slope", TableExtension::last_slope}};
 inline constexpr Choice<ElementChoice> element_names[] = {
     {"auto", ElementChoice::automatic}, {"q1", ElementChoice::q1}, {"bbar", ElementChoice::bbar}};
 inline constexpr Choice<LinearSolverChoice> linear_names[] = {
@@ -332,10 +337,10 @@ public:
 
   /// punch.profile_points: an array of [r, g] pairs.
   void read_points(const std::string& section, const std::string& key,
-                   std::vector<std::pair<double, double>>& target) const {
+                   std::vector<std::pair<double, double>>& target, const std::string& pair_words = "[r, g]") const {
     if (!find(section, key)) return;
     std::vector<std::array<double, 2>> pairs;
-    read_tuples(section, key, "[r, g] pairs", "a pair [r, g]", pairs);
+    read_tuples(section, key, (pair_words + " pairs").c_str(), ("a pair " + pair_words).c_str(), pairs);
     target.clear();
     for (const auto& [r, g] : pairs) target.emplace_back(r, g);
   }

@@ -41,6 +41,7 @@ void LoadInput::multiply_increments(int factor) {
 
 std::string to_string(MaterialModel model) { return name_of(model_names, model); }
 std::string to_string(HardeningLaw law) { return name_of(hardening_names, law); }
+std::string to_string(TableExtension extension) { return name_of(table_extension_names, extension); }
 std::string to_string(SceneKind kind) { return name_of(scene_names, kind); }
 std::string to_string(PunchShapeKind shape) { return name_of(shape_names, shape); }
 
@@ -152,6 +153,51 @@ void check_punch_keys(const Reader& r, LoadCase& lc) {
   }
 }
 
+/// The flow-stress laws' own keys belong to their law: one given under another law is refused
+/// (as a cone's key under a sphere), the initial yield stress of swift and table comes from their
+/// curve (so material.e0 and material.yield_stress are refused there), and a table is read.
+static void check_hardening_keys(const Reader& r, LoadCase& lc) {
+  struct LawKey {
+    const char* key;
+    std::vector<HardeningLaw> laws;
+  };
+  const std::vector<LawKey> table{{"K", {HardeningLaw::ludwik, HardeningLaw::swift}},
+                                  {"prestrain", {HardeningLaw::swift}},
+                                  {"Q", {HardeningLaw::voce}},
+                                  {"b", {HardeningLaw::voce}},
+                                  {"hardening_table", {HardeningLaw::table}},
+                                  {"hardening_points", {HardeningLaw::table}},
+                                  {"table_extension", {HardeningLaw::table}}};
+  const HardeningLaw law = lc.material.hardening;
+  const std::string name = to_string(law);
+  for (const auto& entry : table) {
+    if (std::find(entry.laws.begin(), entry.laws.end(), law) != entry.laws.end() || !r.find("material", entry.key))
+      continue;
+    std::string owners;
+    for (const HardeningLaw owner : entry.laws) owners += (owners.empty() ? "\"" : " and \"") + to_string(owner) + "\"";
+    r.fail(std::string("material.") + entry.key,
+           fmt::format("does not apply to material.hardening = \"{}\" (it belongs to {})", name, owners));
+  }
+  if (law == HardeningLaw::swift || law == HardeningLaw::table)
+    for (const char* key : {"e0", "yield_stress"})
+      if (r.find("material", key))
+        r.fail(std::string("material.") + key,
+               fmt::format("does not apply to material.hardening = \"{}\": its initial yield stress is {}", name,
+                           law == HardeningLaw::swift ? "K prestrain^n" : "the table's first sigma"));
+  if (law == HardeningLaw::table) {
+    const bool file = r.find("material", "hardening_table") != nullptr;
+    const bool inline_points = r.find("material", "hardening_points") != nullptr;
+    if (file == inline_points)
+      r.fail("material.hardening_table",
+             "material.hardening = \"table\" needs exactly one of material.hardening_table (a CSV file of eps_p, "
+             "sigma) and material.hardening_points (an array of [eps_p, sigma] pairs)");
+    if (file)
+      lc.material.hardening_points = read_two_column_csv(r.base_dir() / lc.material.hardening_table_file, r.source(),
+                                                         "material.hardening_table", "eps_p", "sigma",
+                                                         "a hardening table");
+  }
+}
+
 LoadCase from_table(const toml::table& root, const std::string& source, const std::filesystem::path& base_dir) {
   Reader r(root, source, base_dir);
   const auto& keys = key_declarations();
@@ -182,6 +228,7 @@ LoadCase from_table(const toml::table& root, const std::string& source, const st
     if (file.extension() == ".toml" && !file.stem().empty()) lc.output.dir = "out/" + file.stem().string();
   }
   check_punch_keys(r, lc);
+  check_hardening_keys(r, lc);
   // A cone has no length scale: its contact edge sweeps the whole contact zone node by node, and
   // under a plastic material the edge carries the full hardness, so the node-by-node engagement is
   // a first-order error.  30 elements hold Kick's law P/h^2 = const to 0.34% (docs/verification.md, "Kick's law on a cone").

@@ -58,6 +58,68 @@ void validate_profile(const LoadCase& lc, bool within_run) {
                                                  points.back().first, lc.geometry.lx));
 }
 
+/// A hardening law's parameters (docs/MODEL.md §12.1): each law's own keys given, what the law
+/// cannot take refused, a table's flow curve from eps_p = 0, increasing, sigma not falling.
+static void validate_hardening(const LoadCase& lc) {
+  const auto& m = lc.material;
+  if (m.model == MaterialModel::elastic) return;
+  const auto fail = [&](const std::string& key, const std::string& problem) { throw InputError(lc.source, key, problem); };
+  const std::string law = to_string(m.hardening);
+  if (m.flow_stress_law() && m.model != MaterialModel::j2)
+    fail("material.hardening",
+         fmt::format("\"{}\" is a tensile test's flow stress sigma(eps_p), a hardening curve of J2 flow theory: "
+                     "set material.model = \"j2\", or give Ilyushin's deformation theory \"linear\" or \"power\"",
+                     law));
+  const auto require = [&](const std::optional<double>& value, const char* key) {
+    if (!value) fail(key, fmt::format("missing key (material.hardening = \"{}\" needs it)", law));
+  };
+  switch (m.hardening) {
+    case HardeningLaw::linear:
+    case HardeningLaw::power_law: break;
+    case HardeningLaw::power:
+    case HardeningLaw::ludwik:
+      // omega = 1 - (e0/e_u)^(1-n) with n = 0 leaves Ilyushin's conditions; K eps_p^0 jumps at yield.
+      if (!(m.n > 0.0))
+        fail("material.n", fmt::format("must be > 0 for material.hardening = \"{}\" (got {}){}", law, m.n,
+                                       m.hardening == HardeningLaw::ludwik ? ": K eps_p^0 jumps by K at yield" : ""));
+      if (m.hardening == HardeningLaw::ludwik) require(m.K, "material.K");
+      break;
+    case HardeningLaw::swift:
+      require(m.K, "material.K");
+      require(m.prestrain, "material.prestrain");
+      break;
+    case HardeningLaw::voce:
+      require(m.Q, "material.Q");
+      require(m.b, "material.b");
+      break;
+    case HardeningLaw::table: {
+      const auto& points = m.hardening_points;
+      const bool from_file = !m.hardening_table_file.empty();
+      const std::string key = from_file ? "material.hardening_table" : "material.hardening_points";
+      const auto fail_point = [&](std::size_t k, const std::string& problem) {
+        fail(key, fmt::format("{}point {} {}", from_file ? printable(m.hardening_table_file, 200) + ": " : "", k + 1,
+                              problem));
+      };
+      if (points.size() < 2)
+        fail(key, fmt::format("a hardening table needs at least 2 points (eps_p, sigma), got {}", points.size()));
+      for (std::size_t k = 0; k < points.size(); ++k) {
+        const auto [eps_p, sigma] = points[k];
+        if (!(std::isfinite(eps_p) && std::isfinite(sigma))) fail_point(k, "is not two finite numbers");
+        if (k == 0 && eps_p != 0.0)
+          fail_point(k, fmt::format("has eps_p = {}: the table starts at yield, eps_p = 0", eps_p));
+        if (!(sigma > 0.0)) fail_point(k, fmt::format("has sigma = {} Pa: a flow stress is > 0", sigma));
+        if (k > 0 && !(eps_p > points[k - 1].first))
+          fail_point(k, fmt::format("has eps_p = {} after {}: eps_p must increase", eps_p, points[k - 1].first));
+        if (k > 0 && sigma < points[k - 1].second)
+          fail_point(k, fmt::format("has sigma = {} Pa after {} Pa: the flow stress must not fall (softening "
+                                    "localizes; J2 flow theory with a falling curve has no unique solution)",
+                                    sigma, points[k - 1].second));
+      }
+      break;
+    }
+  }
+}
+
 namespace input_detail {
 
 /// The indenter on its own: what its shape needs, whatever specimen it meets.
@@ -132,6 +194,8 @@ void validate(const LoadCase& lc) {
     fail("solver.linear", fmt::format("\"cholmod\" cannot factor the unsymmetric rows of sliding friction "
                                       "(contact.friction = {}): use \"klu\" or \"auto\"",
                                       lc.contact.friction));
+
+  validate_hardening(lc);
 
   const auto& path = lc.load.path;
   if (path.size() < 2) fail("load.path", "needs at least two waypoints, starting at 0");

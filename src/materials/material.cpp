@@ -116,8 +116,13 @@ std::optional<std::string> IlyushinLaw::admissibility_violation() const {
   return std::nullopt;
 }
 
-J2Law::J2Law(const IlyushinLaw& curve)
-    : curve_(curve), bulk_(curve.lame().lambda + 2.0 * curve.lame().mu / 3.0), mu_(curve.lame().mu) {}
+J2Law::J2Law(const IlyushinLaw& curve) : J2Law(curve.elastic(), std::make_shared<IlyushinHardening>(curve)) {}
+
+J2Law::J2Law(const ElasticMaterial& elastic, std::shared_ptr<const HardeningCurve> hardening)
+    : hardening_(std::move(hardening)),
+      bulk_(elastic.lame().lambda + 2.0 * elastic.lame().mu / 3.0),
+      mu_(elastic.lame().mu),
+      initial_yield_(hardening_->initial_yield()) {}
 
 J2Response J2Law::respond(const VoigtVector& strain, const J2State& old) const {
   J2Response r;
@@ -132,26 +137,14 @@ J2Response J2Law::respond(const VoigtVector& strain, const J2State& old) const {
   const Eigen::Vector4d trial = 2.0 * mu_ * (e - old.plastic_strain);
   const double trial_norm = tensor_norm(trial);
   const double trial_equivalent = std::sqrt(1.5) * trial_norm;
-
-  // Radial return, sigma_eq_trial - 3 mu dgamma = sigma_y(eps_p + dgamma), in closed form.  The
-  // hardening curve is Ilyushin's sigma_u(e_u) = 3 mu e_u (1 - omega(e_u)) with the plastic strain
-  // eps_p(e_u) = e_u omega(e_u) (the total intensity less the elastic part sigma_u / 3 mu), so with
-  // e_u the intensity at the end of the step, sigma_y = 3 mu (e_u - eps_p_old - dgamma) and the
-  // return equation becomes linear in e_u: e_u = sigma_eq_trial / (3 mu) + eps_p_old.  (Iterating
-  // on dgamma instead needs eps_p -> e_u inverted at every iterate: a nested Newton, whose pow()
-  // calls under a power law were a fifth of a J2 cone run.)  The point yields when that e_u carries more
-  // plastic strain than the history: e_u omega(e_u) > eps_p_old.
-  const double e_u = trial_equivalent / (3.0 * mu_) + old.equivalent_plastic_strain;
-  const double omega = e_u > curve_.elastic_limit() ? curve_.omega(e_u) : 0.0;
-  const double dgamma = e_u * omega - old.equivalent_plastic_strain;
+  const std::optional<PlasticCorrection> correction =
+      hardening_->correct(trial_equivalent, old.equivalent_plastic_strain, mu_);
 
   Eigen::Vector4d deviator = trial;
   double theta = 1.0, theta_bar = 0.0;
   Eigen::Vector4d n = Eigen::Vector4d::Zero();
-  if (dgamma > 1e-14 * e_u) {
-    // H = (d sigma_u / d e_u) / (d eps_p / d e_u) = 3 mu (1 - d) / d with d = d(e_u omega)/de_u.
-    const double d = omega + e_u * curve_.omega_derivative(e_u);
-    const double hardening = 3.0 * mu_ * (1.0 - d) / d;
+  if (correction) {
+    const double dgamma = correction->dgamma, hardening = correction->hardening_modulus;
     n = trial / trial_norm;
     deviator = trial - 2.0 * mu_ * std::sqrt(1.5) * dgamma * n;
     r.state.plastic_strain += std::sqrt(1.5) * dgamma * n;

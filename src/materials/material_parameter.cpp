@@ -4,6 +4,8 @@
 #include <array>
 #include <limits>
 
+#include <fmt/format.h>
+
 namespace indentsim {
 
 namespace {
@@ -12,12 +14,31 @@ struct ParameterName {
   MaterialParameter parameter;
   const char* key;
 };
-constexpr std::array<ParameterName, 6> names{{{MaterialParameter::E, "material.E"},
-                                              {MaterialParameter::nu, "material.nu"},
-                                              {MaterialParameter::e0, "material.e0"},
-                                              {MaterialParameter::yield_stress, "material.yield_stress"},
-                                              {MaterialParameter::kappa, "material.kappa"},
-                                              {MaterialParameter::n, "material.n"}}};
+constexpr std::array<ParameterName, 10> names{{{MaterialParameter::E, "material.E"},
+                                               {MaterialParameter::nu, "material.nu"},
+                                               {MaterialParameter::e0, "material.e0"},
+                                               {MaterialParameter::yield_stress, "material.yield_stress"},
+                                               {MaterialParameter::kappa, "material.kappa"},
+                                               {MaterialParameter::n, "material.n"},
+                                               {MaterialParameter::K, "material.K"},
+                                               {MaterialParameter::prestrain, "material.prestrain"},
+                                               {MaterialParameter::Q, "material.Q"},
+                                               {MaterialParameter::b, "material.b"}}};
+
+/// The hardening parameters each law has (besides E and nu).
+std::vector<MaterialParameter> law_parameters(HardeningLaw law) {
+  using P = MaterialParameter;
+  switch (law) {
+    case HardeningLaw::linear: return {P::e0, P::yield_stress, P::kappa};
+    case HardeningLaw::power: return {P::e0, P::yield_stress, P::n};
+    case HardeningLaw::power_law: return {P::e0, P::yield_stress, P::n};
+    case HardeningLaw::ludwik: return {P::e0, P::yield_stress, P::K, P::n};
+    case HardeningLaw::swift: return {P::K, P::prestrain, P::n};
+    case HardeningLaw::voce: return {P::e0, P::yield_stress, P::Q, P::b};
+    case HardeningLaw::table: return {};
+  }
+  return {};
+}
 
 }  // namespace
 
@@ -47,6 +68,10 @@ double value_of(const MaterialInput& m, MaterialParameter parameter) {
     case MaterialParameter::yield_stress: return m.yield_stress.value_or(yield_stress_of_e0(m.e0, m.E, m.nu));
     case MaterialParameter::kappa: return m.kappa;
     case MaterialParameter::n: return m.n;
+    case MaterialParameter::K: return m.K.value_or(0.0);
+    case MaterialParameter::prestrain: return m.prestrain.value_or(0.0);
+    case MaterialParameter::Q: return m.Q.value_or(0.0);
+    case MaterialParameter::b: return m.b.value_or(0.0);
   }
   return 0.0;
 }
@@ -62,8 +87,24 @@ void set_value(MaterialInput& m, MaterialParameter parameter, double value) {
     case MaterialParameter::yield_stress: m.yield_stress = value; break;
     case MaterialParameter::kappa: m.kappa = value; break;
     case MaterialParameter::n: m.n = value; break;
+    case MaterialParameter::K: m.K = value; break;
+    case MaterialParameter::prestrain: m.prestrain = value; break;
+    case MaterialParameter::Q: m.Q = value; break;
+    case MaterialParameter::b: m.b = value; break;
   }
   if (m.yield_stress) m.e0 = e0_of_yield_stress(*m.yield_stress, m.E, m.nu);
+}
+
+std::optional<std::string> inapplicable(const MaterialInput& m, MaterialParameter parameter) {
+  if (parameter == MaterialParameter::E || parameter == MaterialParameter::nu) return std::nullopt;
+  if (m.model == MaterialModel::elastic) return "has no effect: material.model is \"elastic\"";
+  const std::vector<MaterialParameter> own = law_parameters(m.hardening);
+  if (std::find(own.begin(), own.end(), parameter) != own.end()) return std::nullopt;
+  std::string list;
+  for (const MaterialParameter p : own) list += (list.empty() ? "" : ", ") + key_of(p);
+  return fmt::format("does not belong to this case's material.hardening = \"{}\" ({})", to_string(m.hardening),
+                     list.empty() ? "a table's points are not fitted: fit a law's parameters instead"
+                                  : "its parameters: " + list);
 }
 
 std::pair<double, double> physical_range(MaterialParameter parameter) {
@@ -71,10 +112,14 @@ std::pair<double, double> physical_range(MaterialParameter parameter) {
   switch (parameter) {
     case MaterialParameter::E:
     case MaterialParameter::e0:
-    case MaterialParameter::yield_stress: return {0.0, inf};
+    case MaterialParameter::yield_stress:
+    case MaterialParameter::K:
+    case MaterialParameter::Q:
+    case MaterialParameter::b: return {0.0, inf};
     case MaterialParameter::nu: return {-1.0, 0.5};
     case MaterialParameter::kappa: return {0.0, 1.0};
-    case MaterialParameter::n: return {0.0, 1.0};
+    case MaterialParameter::n:
+    case MaterialParameter::prestrain: return {0.0, 1.0};
   }
   return {0.0, inf};
 }
@@ -87,11 +132,15 @@ std::pair<double, double> plausible_range(MaterialParameter parameter) {
 std::pair<double, double> default_bounds(MaterialParameter parameter, double start) {
   switch (parameter) {
     case MaterialParameter::E:
-    case MaterialParameter::yield_stress: {
+    case MaterialParameter::yield_stress:
+    case MaterialParameter::K: {
       const auto [low, high] = plausible_range(parameter);
       return {std::max(start / 10.0, low), std::min(start * 10.0, high)};
     }
-    case MaterialParameter::e0: return {start / 10.0, std::min(start * 10.0, 0.99)};
+    case MaterialParameter::e0:
+    case MaterialParameter::prestrain: return {start / 10.0, std::min(start * 10.0, 0.99)};
+    case MaterialParameter::Q:
+    case MaterialParameter::b: return {start / 10.0, start * 10.0};
     case MaterialParameter::nu: return {0.0, 0.49};
     case MaterialParameter::kappa: return {0.0, 0.99};
     case MaterialParameter::n: return {0.01, 0.9};

@@ -105,13 +105,13 @@ std::optional<std::string> IlyushinPointLaw::history_violation(std::size_t point
 
 // ---------------------------------------------------------------------------------------------
 J2PointLaw::J2PointLaw(const J2Law& law, std::size_t points)
-    : law_(law), initial_yield_(law.curve().stress_intensity(law.curve().elastic_limit())), state_(points) {}
+    : law_(law), initial_yield_(law.initial_yield()), state_(points) {}
 
 bool J2PointLaw::elastic(std::size_t point, const VoigtVector& strain) const {
   if (state_[point].equivalent_plastic_strain > 0.0) return false;
   // Virgin point: elastic while the von Mises stress of D eps stays below the initial yield
   // stress, i.e. while 3 mu e_u <= sigma_y(0).
-  return 3.0 * law_.curve().lame().mu * strain_intensity(strain) <= initial_yield_;
+  return 3.0 * law_.shear_modulus() * strain_intensity(strain) <= initial_yield_;
 }
 
 PointResponse J2PointLaw::respond(std::size_t point, const VoigtVector& strain) const {
@@ -122,7 +122,7 @@ PointResponse J2PointLaw::respond(std::size_t point, const VoigtVector& strain) 
   r.strain_intensity = strain_intensity(strain);
   r.plastic = j.plastic;
   // The secant softening of the equivalent Ilyushin state, for display: 1 - sigma_eq / (3 mu e_u).
-  r.omega = r.strain_intensity > 0 ? std::max(0.0, 1.0 - j.equivalent_stress / (3.0 * law_.curve().lame().mu *
+  r.omega = r.strain_intensity > 0 ? std::max(0.0, 1.0 - j.equivalent_stress / (3.0 * law_.shear_modulus() *
                                                                                   r.strain_intensity))
                                    : 0.0;
   return r;
@@ -170,7 +170,7 @@ std::optional<std::string> J2PointLaw::history_violation(std::size_t point, cons
                        "allows (|eps_p| <= sqrt(3/2) eps_p_bar)",
                        norm, path);
   const J2Response again = law_.respond(strain, s);
-  if (again.state.equivalent_plastic_strain - path > accumulated_rounding * std::max(path, law_.curve().elastic_limit()))
+  if (again.state.equivalent_plastic_strain - path > accumulated_rounding * std::max(path, initial_yield_ / (3.0 * law_.shear_modulus())))
     return fmt::format("the committed strain lies outside the yield surface of its history (a converged state "
                        "would have returned {:g} more equivalent plastic strain)",
                        again.state.equivalent_plastic_strain - path);

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "indentsim/geometry/punch.hpp"
+#include "indentsim/materials/hardening.hpp"
 #include "indentsim/base/version.hpp"
 
 namespace indentsim {
@@ -38,13 +39,36 @@ nlohmann::ordered_json run_fields(const LoadCase& lc) {
                 {"stiffness", axisymmetric ? "N/m" : "N/m per m"},
                 {"stress", "Pa"}};
   j["model"] = to_string(m.model);
+  if (!m.flow_stress_law()) {
+    j["material"] = {{"E", m.E},
+                     {"nu", m.nu},
+                     {"e0", m.e0},
+                     {"yield_stress", m.yield_stress.value_or(yield_stress_of_e0(m.e0, m.E, m.nu))},
+                     {"hardening", to_string(m.hardening)},
+                     {"kappa", m.kappa},
+                     {"n", m.n}};
+    return j;
+  }
+  // A tensile test's flow curve: its initial yield stress and the law's own parameters.
+  const double yield = make_hardening_curve(m)->initial_yield();
   j["material"] = {{"E", m.E},
                    {"nu", m.nu},
-                   {"e0", m.e0},
-                   {"yield_stress", m.yield_stress.value_or(yield_stress_of_e0(m.e0, m.E, m.nu))},
-                   {"hardening", to_string(m.hardening)},
-                   {"kappa", m.kappa},
-                   {"n", m.n}};
+                   {"e0", e0_of_yield_stress(yield, m.E, m.nu)},
+                   {"yield_stress", yield},
+                   {"hardening", to_string(m.hardening)}};
+  auto& law = j["material"];
+  switch (m.hardening) {
+    case HardeningLaw::power_law: law["n"] = m.n; break;
+    case HardeningLaw::ludwik: law["K"] = m.K.value_or(0.0), law["n"] = m.n; break;
+    case HardeningLaw::swift: law["K"] = m.K.value_or(0.0), law["prestrain"] = m.prestrain.value_or(0.0), law["n"] = m.n; break;
+    case HardeningLaw::voce: law["Q"] = m.Q.value_or(0.0), law["b"] = m.b.value_or(0.0); break;
+    case HardeningLaw::table:
+      law["points"] = m.hardening_points;
+      law["table_extension"] = to_string(m.table_extension);
+      break;
+    case HardeningLaw::linear:
+    case HardeningLaw::power: break;
+  }
   return j;
 }
 

@@ -113,7 +113,7 @@ NearField choose_near_field(const LoadCase& lc, const Mesh& mesh, const MeshPlan
 
 // "auto": the paper's exact Q1 element unless the scene locks it -- nearly incompressible
 // elasticity (nu >= 0.45), nearly perfect plasticity (isochoric flow with kappa > 0.95 or
-// n < 0.1), or a plastic material under a cone, whose strain is set by the angle and not by the
+// n < 0.1, or any tensile-test flow curve), or a plastic material under a cone, whose strain is set by the angle and not by the
 // depth, so the flow under it is fully plastic and isochoric from the first increment (Q1 locks:
 // on berkovich_cone with Ilyushin's law it overestimates P/h^2 by 1%, with a sawtooth 1.5x as
 // large) -- where mean dilatation (B-bar) is used.
@@ -126,8 +126,10 @@ ElementKind choose_element(const LoadCase& lc) {
   const auto& m = lc.material;
   const bool near_incompressible = m.nu >= 0.45;
   const bool plastic = m.model != MaterialModel::elastic;
+  // A tensile test's flow curve (power_law, ludwik, swift, voce, table) flattens as eps_p grows
+  // (saturates, or is flat beyond a table): the flow under an indenter is nearly perfectly plastic.
   const bool near_perfect_plasticity =
-      plastic && (m.hardening == HardeningLaw::linear ? m.kappa > 0.95 : m.n < 0.1);
+      plastic && (m.flow_stress_law() || (m.hardening == HardeningLaw::linear ? m.kappa > 0.95 : m.n < 0.1));
   const bool sharp_plastic_indentation = plastic && lc.punch.shape == PunchShapeKind::cone;
   return near_incompressible || near_perfect_plasticity || sharp_plastic_indentation ? ElementKind::bbar
                                                                                        : ElementKind::q1;

@@ -61,8 +61,9 @@ void Simulation::build(const RunConfiguration& configuration, const std::optiona
   limit_library_threads();  // one BLAS/OpenMP thread per run (worker_threads.hpp)
   const auto& m = load_case_.material;
   const ElasticMaterial material{m.E, m.nu};
+  // validate() refused a flow-stress law (power_law, ludwik, ...) under Ilyushin's model.
   std::optional<IlyushinLaw> law;
-  if (m.model != MaterialModel::elastic) {
+  if (m.model != MaterialModel::elastic && !m.flow_stress_law()) {
     law.emplace(material, m.e0, m.hardening, m.kappa, m.n);
     if (auto violation = law->admissibility_violation())
       throw InputError(load_case_.source, m.hardening == HardeningLaw::linear ? "material.kappa" : "material.n",
@@ -76,10 +77,11 @@ void Simulation::build(const RunConfiguration& configuration, const std::optiona
   pattern_ = std::make_unique<StiffnessPattern>(*mesh_);
   stiffness_ = std::make_unique<ElasticStiffness>(*mesh_, material, *pattern_);
   bulk_ = stiffness_.get();
-  if (law) {
+  if (m.model != MaterialModel::elastic) {
     const std::size_t points = 4 * static_cast<std::size_t>(mesh_->elements());
     std::unique_ptr<PointLaw> point_law;
-    if (m.model == MaterialModel::j2) point_law = std::make_unique<J2PointLaw>(J2Law(*law), points);
+    if (m.model == MaterialModel::j2)
+      point_law = std::make_unique<J2PointLaw>(J2Law(material, make_hardening_curve(m)), points);
     else point_law = std::make_unique<IlyushinPointLaw>(*law, unloads(load_case_.load.path), points);
     plastic_ = std::make_unique<InelasticBulk>(*stiffness_, std::move(point_law));
     bulk_ = plastic_.get();
@@ -555,7 +557,13 @@ std::optional<Simulation::Sensitivities> Simulation::sensitivities(const std::ve
         break;
       case MaterialParameter::kappa: combination.push_back({0.0, 0.0, 1.0, 0.0}); break;
       case MaterialParameter::n: combination.push_back({0.0, 0.0, 0.0, 1.0}); break;
-      case MaterialParameter::nu: return std::nullopt;
+      // nu shapes the condensed far field; K, prestrain, Q and b are J2's, whose history has no
+      // derivative carried (the whole run's finite differences give theirs).
+      case MaterialParameter::nu:
+      case MaterialParameter::K:
+      case MaterialParameter::prestrain:
+      case MaterialParameter::Q:
+      case MaterialParameter::b: return std::nullopt;
     }
   }
   // The whole mesh's du/d(theta): the condensed far field is linear elastic, K_FF u_F = -K_FR u_R,

@@ -34,7 +34,11 @@ struct PunchInput {
 };
 
 enum class MaterialModel { elastic, ilyushin, j2 };
-enum class HardeningLaw { linear, power };
+/// linear and power: Ilyushin's omega(e_u) (both models); power_law, ludwik, swift, voce and table:
+/// the flow stress sigma_y(eps_p) of a tensile test (J2 only; docs/MODEL.md §12.1).
+enum class HardeningLaw { linear, power, power_law, ludwik, swift, voce, table };
+/// Beyond a hardening table's last point: flat (perfectly plastic) or along the last segment's slope.
+enum class TableExtension { flat, last_slope };
 
 struct MaterialInput {
   MaterialModel model = MaterialModel::elastic;
@@ -45,7 +49,18 @@ struct MaterialInput {
   std::optional<double> yield_stress;
   HardeningLaw hardening = HardeningLaw::linear;
   double kappa = 0.9;  ///< linear law: omega = kappa (1 - e0/e_u)
-  double n = 0.3;      ///< power law: sigma_u ~ e_u^n
+  double n = 0.3;      ///< power law: sigma_u ~ e_u^n; power_law, ludwik, swift: their exponent
+  // The flow-stress laws' own parameters, given only with their law (which requires them).
+  std::optional<double> K;          ///< ludwik, swift: strength coefficient [Pa]
+  std::optional<double> prestrain;  ///< swift: eps_0, the plastic strain the curve starts from
+  std::optional<double> Q;          ///< voce: saturation increase of the flow stress [Pa]
+  std::optional<double> b;          ///< voce: saturation rate
+  std::string hardening_table_file;  ///< table: the CSV file it was read from, as given ("" when inline)
+  std::vector<std::pair<double, double>> hardening_points;  ///< table: points (eps_p, sigma [Pa])
+  TableExtension table_extension = TableExtension::flat;
+
+  /// The law is a flow-stress curve of J2 flow theory only (not an Ilyushin omega).
+  bool flow_stress_law() const { return hardening != HardeningLaw::linear && hardening != HardeningLaw::power; }
 };
 
 struct LoadInput {
@@ -243,5 +258,6 @@ std::string to_string(MaterialModel model);
 std::string to_string(SceneKind kind);
 std::string to_string(PunchShapeKind shape);
 std::string to_string(HardeningLaw law);
+std::string to_string(TableExtension extension);
 
 }  // namespace indentsim

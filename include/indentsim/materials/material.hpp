@@ -12,12 +12,14 @@
 // 1 the in-plane horizontal (radial) direction, 2 the vertical, 3 the out-of-plane direction: in
 // plane strain eps33 = 0 and s33 is the out-of-plane stress; in axisymmetry 3 is the hoop
 // direction, eps33 = u_r / r.  The kinematics (include/indentsim/geometry/kinematics.hpp) makes the strain.
+#include <memory>
 #include <optional>
 #include <string>
 
 #include <Eigen/Core>
 
 #include "indentsim/input/load_case.hpp"
+#include "indentsim/materials/hardening.hpp"
 #include "indentsim/materials/material_parameter.hpp"
 
 namespace indentsim {
@@ -112,22 +114,25 @@ struct J2Response {
   ConstitutiveMatrix tangent = ConstitutiveMatrix::Zero();  ///< consistent (algorithmic) tangent
 };
 
-/// Incremental J2 flow theory with isotropic hardening (any kinematics: eps33 is given).  Its hardening curve is the
-/// uniaxial curve of an Ilyushin law: on proportional loading the equivalent plastic strain is
-/// eps_p = e_u omega(e_u) and the yield stress sigma_y = sigma_u(e_u) = 3 mu (1 - omega) e_u, so
-/// both models give the same stress (the conditions 0 < d(e_u omega)/de_u < 1 make the map
-/// monotone and the hardening modulus positive).  Radial return (Simo and Hughes, Computational
-/// Inelasticity, section 3.3) with its consistent tangent.
+/// Incremental J2 flow theory with isotropic hardening (any kinematics: eps33 is given): radial
+/// return (Simo and Hughes, Computational Inelasticity, section 3.3) with its consistent tangent,
+/// on a hardening curve sigma_y(eps_p) (materials/hardening.hpp).  With the curve of an Ilyushin
+/// law, on proportional loading the equivalent plastic strain is eps_p = e_u omega(e_u) and the
+/// yield stress sigma_y = sigma_u(e_u) = 3 mu (1 - omega) e_u, so both models give the same stress.
 class J2Law {
 public:
+  /// The hardening curve of an Ilyushin law.
   explicit J2Law(const IlyushinLaw& curve);
+  J2Law(const ElasticMaterial& elastic, std::shared_ptr<const HardeningCurve> hardening);
   /// Stress at total strain `strain` from the committed history `old`.
   J2Response respond(const VoigtVector& strain, const J2State& old) const;
-  const IlyushinLaw& curve() const { return curve_; }
+  const HardeningCurve& hardening() const { return *hardening_; }
+  double shear_modulus() const { return mu_; }
+  double initial_yield() const { return initial_yield_; }
 
 private:
-  IlyushinLaw curve_;
-  double bulk_ = 0.0, mu_ = 0.0;
+  std::shared_ptr<const HardeningCurve> hardening_;
+  double bulk_ = 0.0, mu_ = 0.0, initial_yield_ = 0.0;
 };
 
 }  // namespace indentsim

@@ -1,7 +1,8 @@
 #pragma once
 // The material parameters a fit may identify, by their load-case keys: material.E, material.nu,
 // material.e0 or material.yield_stress (the uniaxial yield stress users think in; e0 follows from
-// it, e0 = sigma_y / (3 mu)), material.kappa (linear hardening) and material.n (power hardening).
+// it, e0 = sigma_y / (3 mu)), material.kappa (linear hardening), material.n (the power laws'
+// exponent), material.K, .prestrain (Ludwik, Swift), material.Q, .b (Voce).
 // One place for their names, their values in a load case and their physically safe ranges.
 #include <optional>
 #include <string>
@@ -12,7 +13,7 @@
 
 namespace indentsim {
 
-enum class MaterialParameter { E, nu, e0, yield_stress, kappa, n };
+enum class MaterialParameter { E, nu, e0, yield_stress, kappa, n, K, prestrain, Q, b };
 
 /// "material.E", ...
 std::string key_of(MaterialParameter parameter);
@@ -20,6 +21,9 @@ std::string key_of(MaterialParameter parameter);
 std::optional<MaterialParameter> parameter_of_key(const std::string& key);
 /// Every fittable key, for messages.
 std::string fittable_keys();
+/// Why the parameter does not act in the material (an elastic model; another hardening law's
+/// parameter, naming the law's own), or nullopt when it does.
+std::optional<std::string> inapplicable(const MaterialInput& material, MaterialParameter parameter);
 
 /// The parameter's value in a load case (yield_stress: given, or derived from e0).
 double value_of(const MaterialInput& material, MaterialParameter parameter);
