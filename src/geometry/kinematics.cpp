@@ -40,6 +40,124 @@ std::array<StrainDisplacement, 4> Kinematics::gauss_point_strain_displacements(c
   return b;
 }
 
+/// The in-plane rows of Q1's gradient operator; the out-of-plane row (4) is left zero.
+static GradientOperator in_plane_gradient(const ShapeValues& s) {
+  GradientOperator g = GradientOperator::Zero();
+  for (int q = 0; q < 4; ++q) {
+    g(0, q) = s.dx[q];      // d u1 / d X1
+    g(1, q) = s.dy[q];      // d u1 / d X2
+    g(2, 4 + q) = s.dx[q];  // d u2 / d X1
+    g(3, 4 + q) = s.dy[q];  // d u2 / d X2
+  }
+  return g;
+}
+
+FiniteStrainQuadrature Kinematics::finite_strain_quadrature(const Rectangle& rect, ElementKind kind) const {
+  FiniteStrainQuadrature q;
+  const auto& points = gauss_points_2x2();
+  for (std::size_t p = 0; p < points.size(); ++p) {
+    q.g[p] = gradient_operator(rect, points[p].xi, points[p].eta);
+    q.volume[p] = points[p].weight * measure(rect, points[p].xi);
+  }
+  q.f_bar = kind == ElementKind::bbar;
+  q.dilatation_dimensions = dilatation_dimensions();
+  return q;
+}
+
+namespace {
+/// d J / d F, J = (F11 F22 - F12 F21) F33.
+Eigen::Matrix<double, 1, 5> jacobian_derivative(const DeformationGradient& F) {
+  return (Eigen::Matrix<double, 1, 5>() << F[3] * F[4], -F[2] * F[4], -F[1] * F[4], F[0] * F[4],
+          F[0] * F[3] - F[1] * F[2])
+      .finished();
+}
+
+/// F-bar's scaling: s = (J-bar / J_g)^(1/d) at each point and ds/due, and which components it
+/// scales (all five about the axis; the in-plane four in plane strain).
+struct FBarScaling {
+  std::array<double, 4> s{1.0, 1.0, 1.0, 1.0};
+  std::array<Eigen::Matrix<double, 1, 8>, 4> ds{};
+  Eigen::Matrix<double, 5, 1> scaled = Eigen::Matrix<double, 5, 1>::Ones();
+};
+FBarScaling f_bar_scaling(const FiniteStrainQuadrature& q, const std::array<DeformationGradient, 4>& F) {
+  FBarScaling f;
+  for (auto& d : f.ds) d.setZero();
+  if (q.dilatation_dimensions == 2) f.scaled[4] = 0.0;
+  if (!q.f_bar) return f;
+  double mean = 0.0, volume = 0.0;
+  Eigen::Matrix<double, 1, 8> d_mean = Eigen::Matrix<double, 1, 8>::Zero();
+  std::array<double, 4> j{};
+  std::array<Eigen::Matrix<double, 1, 8>, 4> dj;
+  for (std::size_t p = 0; p < 4; ++p) {
+    j[p] = jacobian(F[p]);
+    dj[p] = jacobian_derivative(F[p]) * q.g[p];
+    mean += q.volume[p] * j[p];
+    d_mean += q.volume[p] * dj[p];
+    volume += q.volume[p];
+  }
+  mean /= volume;
+  d_mean /= volume;
+  const double d = q.dilatation_dimensions;
+  for (std::size_t p = 0; p < 4; ++p) {
+    f.s[p] = std::pow(mean / j[p], 1.0 / d);
+    f.ds[p] = f.s[p] / d * (d_mean / mean - dj[p] / j[p]);
+  }
+  return f;
+}
+
+/// F's components scaled by s where `scaled` says so.
+DeformationGradient scale(const DeformationGradient& v, double s, const Eigen::Matrix<double, 5, 1>& scaled) {
+  DeformationGradient out = v;
+  for (int i = 0; i < 5; ++i)
+    if (scaled[i] != 0.0) out[i] *= s;
+  return out;
+}
+}  // namespace
+
+std::array<DeformationGradient, 4> FiniteStrainQuadrature::gradients(const ElementVector& ue) const {
+  std::array<DeformationGradient, 4> F;
+  for (std::size_t p = 0; p < 4; ++p) F[p] = identity_deformation() + g[p] * ue;
+  return F;
+}
+
+std::array<DeformationGradient, 4> FiniteStrainQuadrature::law_gradients(const ElementVector& ue) const {
+  std::array<DeformationGradient, 4> F = gradients(ue);
+  if (!f_bar) return F;
+  const FBarScaling f = f_bar_scaling(*this, F);
+  for (std::size_t p = 0; p < 4; ++p) F[p] = scale(F[p], f.s[p], f.scaled);
+  return F;
+}
+
+ElementVector FiniteStrainQuadrature::internal_force(const ElementVector& ue,
+                                                     const std::array<NominalStress, 4>& law_stress) const {
+  // tau(F-bar) F^-T = P(F-bar) F-bar^T F^-T = s P(F-bar) on the scaled components.
+  const FBarScaling f = f_bar ? f_bar_scaling(*this, gradients(ue)) : FBarScaling{};
+  ElementVector force = ElementVector::Zero();
+  for (std::size_t p = 0; p < 4; ++p)
+    force.noalias() += volume[p] * g[p].transpose() * (f_bar ? scale(law_stress[p], f.s[p], f.scaled) : law_stress[p]);
+  return force;
+}
+
+ElementMatrix FiniteStrainQuadrature::stiffness(const ElementVector& ue, const std::array<NominalStress, 4>& law_stress,
+                                                const std::array<NominalTangent, 4>& law_tangent) const {
+  ElementMatrix k = ElementMatrix::Zero();
+  if (!f_bar) {
+    for (std::size_t p = 0; p < 4; ++p) k.noalias() += volume[p] * g[p].transpose() * law_tangent[p] * g[p];
+    return k;
+  }
+  // P_mod = S P(F-bar), F-bar = S F with S = diag(s on the scaled components):
+  //   dP_mod = S A (S G + (scaled o F) ds) + (scaled o P) ds.
+  const std::array<DeformationGradient, 4> F = gradients(ue);
+  const FBarScaling f = f_bar_scaling(*this, F);
+  for (std::size_t p = 0; p < 4; ++p) {
+    const Eigen::Matrix<double, 5, 5> S = scale(DeformationGradient::Ones(), f.s[p], f.scaled).asDiagonal();
+    const Eigen::Matrix<double, 5, 8> d_f_bar = S * g[p] + F[p].cwiseProduct(f.scaled) * f.ds[p];
+    const Eigen::Matrix<double, 5, 8> d_p = S * law_tangent[p] * d_f_bar + law_stress[p].cwiseProduct(f.scaled) * f.ds[p];
+    k.noalias() += volume[p] * g[p].transpose() * d_p;
+  }
+  return k;
+}
+
 ElementQuadrature Kinematics::quadrature(const Rectangle& rect, ElementKind kind) const {
   ElementQuadrature q;
   q.b = gauss_point_strain_displacements(rect, kind);
@@ -89,6 +207,10 @@ StrainDisplacement PlaneStrain::strain_displacement(const Rectangle& rect, doubl
     b.row(1) += shift;
   }
   return b;
+}
+
+GradientOperator PlaneStrain::gradient_operator(const Rectangle& rect, double xi, double eta) const {
+  return in_plane_gradient(shape_values(rect, xi, eta));
 }
 
 ElementMatrix PlaneStrain::elastic_stiffness(const Rectangle& rect, const LameConstants& lame, ElementKind kind) const {
@@ -158,6 +280,16 @@ std::array<StrainDisplacement, 4> Axisymmetric::gauss_point_strain_displacements
   const DilatationRow mean = mean_dilatation(*this, rect, b);
   for (StrainDisplacement& bg : b) shift_to_mean_dilatation(bg, mean);
   return b;
+}
+
+GradientOperator Axisymmetric::gradient_operator(const Rectangle& rect, double xi, double eta) const {
+  // F33 = 1 + u_r / R: the hoop stretch of the ring at reference radius R (Gauss points are off
+  // the axis).
+  const ShapeValues s = shape_values(rect, xi, eta);
+  GradientOperator g = in_plane_gradient(s);
+  const double r = rect.x0 + xi * rect.width;
+  for (int q = 0; q < 4; ++q) g(4, q) = s.n[q] / r;
+  return g;
 }
 
 double Axisymmetric::measure(const Rectangle& rect, double xi) const {

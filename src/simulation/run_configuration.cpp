@@ -59,7 +59,7 @@ PilotResult pilot_run(const LoadCase& lc) {
       for (int ei = 0; ei < mesh.elements_x(); ++ei)
         for (int ej = 0; ej < mesh.elements_y(); ++ej)
           for (std::size_t g = 0; g < 4; ++g)
-            if (sim.plasticity()->law().has_yielded(4 * static_cast<std::size_t>(mesh.element(ei, ej)) + g)) {
+            if (sim.plasticity()->has_yielded(4 * static_cast<std::size_t>(mesh.element(ei, ej)) + g)) {
               zone.width = std::max(zone.width, mesh.x(ei + 1));
               zone.depth = std::max(zone.depth, -mesh.y(ej));
             }

@@ -348,7 +348,7 @@ bool Simulation::grow_near_field(const std::vector<double>& u, double alpha) {
     for (int ei = 0; ei < mesh_->elements_x() && !yields; ++ei)
       for (int ej = 0; ej < mesh_->elements_y(); ++ej) {
         if (ei < state_.near_field.elements_x && ej > top - state_.near_field.elements_y) continue;
-        if (plastic_->inelastic_at(ei, ej, u.data())) {
+        if (plastic_->departs_at(ei, ej, u.data())) {
           yields = true;
           break;
         }

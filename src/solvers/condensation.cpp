@@ -284,13 +284,13 @@ void FarFieldCondensation::expand(const std::vector<double>& u_near, std::vector
 
 void CondensedBulk::internal_force(const double* u, double* f) {
   condensation_.pattern().multiply(condensation_.values(), u, f);
-  if (inelastic_) inelastic_->add_force_corrections(condensation_.elements(), u, f);
+  if (nonlinear_) nonlinear_->add_force_corrections(condensation_.elements(), u, f);
 }
 
 void CondensedBulk::tangent(const double* u, double* values) {
   const auto& k = condensation_.values();
   std::copy(k.begin(), k.end(), values);
-  if (inelastic_) inelastic_->add_tangent_corrections(condensation_.elements(), u, values);
+  if (nonlinear_) nonlinear_->add_tangent_corrections(condensation_.elements(), u, values);
 }
 
 }  // namespace indentsim

@@ -29,7 +29,7 @@ bool InelasticBulk::inelastic(int ei, int ej, const ElementVector& ue, std::arra
   return false;
 }
 
-bool InelasticBulk::inelastic_at(int ei, int ej, const double* u) const {
+bool InelasticBulk::departs_at(int ei, int ej, const double* u) const {
   std::array<VoigtVector, 4> strains;
   return inelastic(ei, ej, u, strains);
 }

@@ -17,6 +17,7 @@
 #include <string>
 
 #include "indentsim/geometry/element.hpp"
+#include "indentsim/materials/finite_strain.hpp"
 #include "indentsim/materials/material.hpp"
 
 namespace indentsim {
@@ -34,6 +35,35 @@ struct ElementQuadrature {
   ElementMatrix stiffness(const std::array<ConstitutiveMatrix, 4>& d) const;
   /// sum_g B_g^T sigma_g dV_g
   ElementVector internal_force(const std::array<VoigtVector, 4>& stress) const;
+};
+
+/// d F / d ue at a Gauss point: F = I + G ue in F's components (F11, F12, F21, F22, F33),
+/// total Lagrangian (gradients with respect to the reference position).
+using GradientOperator = Eigen::Matrix<double, 5, 8>;
+
+/// The 2x2 Gauss rule on one rectangle for finite strain (docs/MODEL.md §12): the gradient operator
+/// at each point and the reference body each point stands for.  For ElementKind::bbar it is the
+/// F-bar element (de Souza Neto, Peric, Dutko and Owen, Int. J. Solids Struct. 33, 1996): the law
+/// takes F-bar = (J-bar / J)^(1/d) F, with J-bar the element's volume mean of J = det F and d the
+/// dimensions the dilatation acts in (2 in plane strain, where F33 = 1 stays; 3 about the axis);
+/// its small-strain limit is mean dilatation (B-bar).  The internal force is
+/// f = sum_g V_g G_g^T (tau(F-bar) F^-T), whose tangent is not symmetric.
+struct FiniteStrainQuadrature {
+  std::array<GradientOperator, 4> g;
+  std::array<double, 4> volume{};
+  bool f_bar = false;
+  int dilatation_dimensions = 2;
+
+  /// F at each point from the element's unknowns (paper order).
+  std::array<DeformationGradient, 4> gradients(const ElementVector& ue) const;
+  /// What the law takes at each point: F, or F-bar.
+  std::array<DeformationGradient, 4> law_gradients(const ElementVector& ue) const;
+  /// sum_g V_g G_g^T P_g with P_g the nominal stress of the law at law_gradients(ue) (F-bar:
+  /// scaled back to F, P (J-bar / J)^(1/d) on the scaled components).
+  ElementVector internal_force(const ElementVector& ue, const std::array<NominalStress, 4>& law_stress) const;
+  /// d internal_force / d ue from the law's nominal stresses and tangents at law_gradients(ue).
+  ElementMatrix stiffness(const ElementVector& ue, const std::array<NominalStress, 4>& law_stress,
+                          const std::array<NominalTangent, 4>& law_tangent) const;
 };
 
 class Kinematics {
@@ -77,8 +107,15 @@ public:
   /// The output name of stress component 33 (sigma33 out of plane; sigma_hoop).
   virtual std::string out_of_plane_stress() const = 0;
 
+  /// d F / d ue at (xi, eta) of the rectangle (Q1; F-bar is FiniteStrainQuadrature's).
+  virtual GradientOperator gradient_operator(const Rectangle& rect, double xi, double eta) const = 0;
+  /// The dimensions a volume change acts in: 2 in plane strain (F33 = 1), 3 about the axis.
+  virtual int dilatation_dimensions() const = 0;
+
   /// B and the measure at the four Gauss points of the rectangle.
   ElementQuadrature quadrature(const Rectangle& rect, ElementKind kind) const;
+  /// The gradient operators and the reference measure at the four Gauss points (finite strain).
+  FiniteStrainQuadrature finite_strain_quadrature(const Rectangle& rect, ElementKind kind) const;
   /// Stiffness by 2x2 Gauss quadrature with one constitutive matrix per Gauss point.
   ElementMatrix stiffness(const Rectangle& rect, const std::array<ConstitutiveMatrix, 4>& d, ElementKind kind) const;
   ElementMatrix stiffness(const Rectangle& rect, const ConstitutiveMatrix& d, ElementKind kind) const {
@@ -93,6 +130,8 @@ public:
   SceneKind kind() const override { return SceneKind::plane_strain; }
   StrainDisplacement strain_displacement(const Rectangle& rect, double xi, double eta, ElementKind kind) const override;
   double measure(const Rectangle& rect, double) const override { return rect.width * rect.height; }
+  GradientOperator gradient_operator(const Rectangle& rect, double xi, double eta) const override;
+  int dilatation_dimensions() const override { return 2; }
   ElementMatrix elastic_stiffness(const Rectangle& rect, const LameConstants& lame, ElementKind kind) const override;
   bool position_dependent() const override { return false; }
   double symmetry_factor() const override { return 2.0; }
@@ -115,6 +154,8 @@ public:
   std::array<StrainDisplacement, 4> gauss_point_strain_displacements(const Rectangle& rect,
                                                                     ElementKind kind) const override;
   double measure(const Rectangle& rect, double xi) const override;
+  GradientOperator gradient_operator(const Rectangle& rect, double xi, double eta) const override;
+  int dilatation_dimensions() const override { return 3; }
   bool position_dependent() const override { return true; }
   double symmetry_factor() const override { return 1.0; }
   double nodal_force_scale(double stress_times_length, double contact) const override;

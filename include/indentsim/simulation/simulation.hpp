@@ -52,7 +52,8 @@ public:
   const ContactDiscretization& contact_boundary() const { return *contact_; }
   const BulkModel& bulk() const { return *bulk_; }
   /// The inelastic model, or nullptr for an elastic load case (which never enters plasticity code).
-  const InelasticBulk* plasticity() const { return plastic_.get(); }
+  /// The bulk's nonlinear part (plasticity, finite strain), or null for a linear elastic run.
+  const NonlinearBulk* plasticity() const { return plastic_.get(); }
   /// Newton report of the last attempt (for diagnostics and tests).
   const NewtonReport& last_newton_report() const { return last_report_; }
 
@@ -192,7 +193,7 @@ private:
   std::unique_ptr<Mesh> mesh_;
   std::unique_ptr<StiffnessPattern> pattern_;
   std::unique_ptr<ElasticStiffness> stiffness_;
-  std::unique_ptr<InelasticBulk> plastic_;
+  std::unique_ptr<NonlinearBulk> plastic_;
   BulkModel* bulk_ = nullptr;  // stiffness_ or plastic_
   std::unique_ptr<ContactDiscretization> contact_;
   NewtonSettings settings_;

@@ -7,7 +7,7 @@
 // node that may touch -- and the far field F.  No load acts on F, so its equations
 //     K_FR u_R + K_FF u_F = 0   give   u_F = -K_FF^{-1} K_FR u_R,
 // and the near-field equations become, exactly (not an approximation),
-//     K_red u_R + (inelastic corrections of the near elements) = contact reactions,
+//     K_red u_R + (nonlinear corrections of the near elements) = contact reactions,
 //     K_red = K_RR - K_RF K_FF^{-1} K_FR      (the Schur complement of K_FF).
 // K_FF is symmetric positive definite (the far field holds the clamped base); it is factored once
 // per mesh with CHOLMOD's supernodal Cholesky and K_red is formed once, column block by column
@@ -23,7 +23,7 @@
 
 #include "indentsim/solvers/assembly.hpp"
 #include "indentsim/solvers/contact.hpp"
-#include "indentsim/solvers/inelastic_bulk.hpp"
+#include "indentsim/solvers/nonlinear_bulk.hpp"
 
 namespace indentsim {
 
@@ -106,18 +106,18 @@ private:
   std::unique_ptr<FarFactor> far_;
 };
 
-/// The near field's bulk operator: K_red u_R plus the inelastic corrections of the near elements.
-/// With `inelastic` null it is linear elastic (an elastic scene, or a plastic run's predictor).
+/// The near field's bulk operator: K_red u_R plus the nonlinear corrections of the near elements.
+/// With `nonlinear` null it is linear elastic (an elastic scene, or a plastic run's predictor).
 class CondensedBulk : public BulkOperator {
 public:
-  CondensedBulk(const FarFieldCondensation& condensation, const InelasticBulk* inelastic)
-      : condensation_(condensation), inelastic_(inelastic) {}
+  CondensedBulk(const FarFieldCondensation& condensation, const NonlinearBulk* nonlinear)
+      : condensation_(condensation), nonlinear_(nonlinear) {}
   void internal_force(const double* u, double* f) override;
   void tangent(const double* u, double* values) override;
 
 private:
   const FarFieldCondensation& condensation_;
-  const InelasticBulk* inelastic_;
+  const NonlinearBulk* nonlinear_;
 };
 
 }  // namespace indentsim

@@ -11,12 +11,12 @@
 #include <unordered_map>
 #include <vector>
 
-#include "indentsim/solvers/assembly.hpp"
 #include "indentsim/materials/point_law.hpp"
+#include "indentsim/solvers/nonlinear_bulk.hpp"
 
 namespace indentsim {
 
-class InelasticBulk : public BulkModel {
+class InelasticBulk final : public NonlinearBulk {
 public:
   InelasticBulk(const ElasticStiffness& elastic, std::unique_ptr<PointLaw> law);
 
@@ -33,7 +33,8 @@ public:
 
   const PointLaw& law() const { return *law_; }
   const ElasticStiffness& elastic() const { return elastic_; }
-  void set_loading(bool beyond_previous_peak) {
+  bool has_yielded(std::size_t point) const override { return law_->has_yielded(point); }
+  void set_loading(bool beyond_previous_peak) override {
     kept_.clear();  // the branch of the law may change
     law_->set_loading(beyond_previous_peak);
   }
@@ -44,19 +45,19 @@ public:
   /// Elements whose four Gauss points respond elastically (the whole far field) add nothing.
   /// The Gauss-point responses of the force pass are kept, so that the tangent at the same u (the
   /// Jacobian KINSOL asks for after a residual) does not run the return map again.
-  void add_force_corrections(const std::vector<ElementSlot>& slots, const double* u, double* f) const;
-  void add_tangent_corrections(const std::vector<ElementSlot>& slots, const double* u, double* values) const;
+  void add_force_corrections(const std::vector<ElementSlot>& slots, const double* u, double* f) const override;
+  void add_tangent_corrections(const std::vector<ElementSlot>& slots, const double* u, double* values) const override;
   /// True if a Gauss point of element (ei, ej) is inelastic at u (free-equation vector).
-  bool inelastic_at(int ei, int ej, const double* u) const;
+  bool departs_at(int ei, int ej, const double* u) const override;
   /// Adds d f_int / d theta at fixed u (theta = e0, kappa or n) over the slots' elements to df;
   /// false (df then unusable) when the law cannot give it at this state (PointLaw).
   bool add_parameter_derivative(const std::vector<ElementSlot>& slots, const double* u, MaterialParameter parameter,
-                                double* df) const;
+                                double* df) const override;
   /// Hands the law d eps/d theta at the Gauss points of the slots' elements, from a displacement
   /// sensitivity du (free-equation vector of the slots' system): PointLaw::record_strain_derivatives.
-  void record_strain_derivatives(const std::vector<ElementSlot>& slots, const double* du, MaterialParameter parameter);
-  /// The whole mesh's element slots (its free-equation system).
-  const std::vector<ElementSlot>& slots() const { return slots_; }
+  void record_strain_derivatives(const std::vector<ElementSlot>& slots, const double* du,
+                                 MaterialParameter parameter) override;
+  const std::vector<ElementSlot>& slots() const override { return slots_; }
 
 private:
   /// The four Gauss-point tangents of an inelastic element at its unknowns ue, from the force pass.

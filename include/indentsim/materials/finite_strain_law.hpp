@@ -1,0 +1,95 @@
+#pragma once
+// Material laws of finite strain (docs/MODEL.md §12): a deformation gradient in, the nominal
+// stress P and its tangent dP/dF out, with the history of every Gauss point of the mesh (index =
+// 4 * element + point), as PointLaw is for small strain.  The small-strain laws act unchanged on
+// logarithmic strains (materials/finite_strain.hpp):
+//   HenckyPointLaw       a law of the Hencky strain 1/2 ln(F F^T): elasticity, or Ilyushin's
+//                        secant law (with its unloading theorem, in Hencky strains);
+//   J2LogStrainPointLaw  J2 flow theory in the multiplicative split F = F_e F_p: the radial
+//                        return of J2Law on the trial elastic strain 1/2 ln(F C_p^-1 F^T).
+#include <cstddef>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/StdVector>
+
+#include "indentsim/materials/finite_strain.hpp"
+#include "indentsim/materials/point_law.hpp"
+
+namespace indentsim {
+
+/// The response of one Gauss point at a deformation gradient.
+struct FiniteStrainResponse {
+  NominalStress nominal = NominalStress::Zero();      ///< first Piola-Kirchhoff stress P
+  NominalTangent tangent = NominalTangent::Zero();    ///< dP/dF, consistent
+  VoigtVector kirchhoff = VoigtVector::Zero();        ///< tau = J sigma (11, 22, 12, 33)
+  VoigtVector logarithmic_strain = VoigtVector::Zero();  ///< 1/2 ln(F F^T), engineering shear
+  double strain_intensity = 0.0;                      ///< e_u of the logarithmic strain
+  bool plastic = false;                               ///< on a plastic branch now
+};
+
+class FiniteStrainPointLaw {
+public:
+  virtual ~FiniteStrainPointLaw() = default;
+  virtual FiniteStrainResponse respond(std::size_t point, const DeformationGradient& F) const = 0;
+  /// Accepts F as the converged state of the point.
+  virtual void commit(std::size_t point, const DeformationGradient& F) = 0;
+  virtual bool has_yielded(std::size_t point) const = 0;
+  /// As PointLaw::set_loading: the branch of a law that follows the global load history.
+  virtual void set_loading(bool /*beyond_previous_peak*/) {}
+  /// The carried state of every point, flattened, and its restoration (checkpoints).
+  virtual std::vector<double> history() const = 0;
+  virtual void restore(const std::vector<double>& history) = 0;
+};
+
+/// A law of the Hencky strain e = 1/2 ln(F F^T): Kirchhoff stress tau(e) = the small-strain law's
+/// stress at e.  Without a small-strain law, Hencky elasticity tau = D e (exact for moderate
+/// strains of metals: Anand, J. Appl. Mech. 46, 1979).
+class HenckyPointLaw final : public FiniteStrainPointLaw {
+public:
+  /// `law` may be null (elasticity).
+  HenckyPointLaw(const ElasticMaterial& elastic, std::unique_ptr<PointLaw> law);
+  FiniteStrainResponse respond(std::size_t point, const DeformationGradient& F) const override;
+  void commit(std::size_t point, const DeformationGradient& F) override;
+  bool has_yielded(std::size_t point) const override { return law_ && law_->has_yielded(point); }
+  void set_loading(bool beyond_previous_peak) override {
+    if (law_) law_->set_loading(beyond_previous_peak);
+  }
+  std::vector<double> history() const override { return law_ ? law_->history() : std::vector<double>{}; }
+  void restore(const std::vector<double>& history) override;
+
+private:
+  ConstitutiveMatrix elastic_;
+  std::unique_ptr<PointLaw> law_;
+};
+
+/// History of one Gauss point of J2 in the multiplicative split.
+struct J2FiniteState {
+  SymmetricTensor inverse_plastic_metric = identity_tensor();  ///< C_p^-1 = F_p^-1 F_p^-T
+  double equivalent_plastic_strain = 0.0;
+};
+
+/// J2 flow theory with isotropic hardening in the logarithmic-strain framework (de Souza Neto,
+/// Peric and Owen, 2008, box 14.3): b_e^tr = F C_p^-1 F^T, the small-strain radial return on
+/// e_e^tr = 1/2 ln b_e^tr gives the Kirchhoff stress and e_e, and C_p^-1 = F^-1 exp(2 e_e) F^-T.
+/// The exponential map keeps plastic flow isochoric exactly (det C_p = 1).
+class J2LogStrainPointLaw final : public FiniteStrainPointLaw {
+public:
+  J2LogStrainPointLaw(const J2Law& law, std::size_t points);
+  FiniteStrainResponse respond(std::size_t point, const DeformationGradient& F) const override;
+  void commit(std::size_t point, const DeformationGradient& F) override;
+  bool has_yielded(std::size_t point) const override { return state_[point].equivalent_plastic_strain > 0.0; }
+  std::vector<double> history() const override;
+  void restore(const std::vector<double>& history) override;
+  const J2FiniteState& state(std::size_t point) const { return state_[point]; }
+
+private:
+  /// The response and the state it leaves.
+  FiniteStrainResponse respond(const DeformationGradient& F, const J2FiniteState& old, J2FiniteState* updated) const;
+  J2Law law_;
+  std::vector<J2FiniteState, Eigen::aligned_allocator<J2FiniteState>> state_;
+};
+
+}  // namespace indentsim

@@ -1,0 +1,391 @@
+// Finite-strain kinematics at a point (docs/MODEL.md §12): the logarithmic strain of stretches,
+// rotations and their products, its derivative and the nominal tangent against central
+// differences, the small-strain limit, and J2 in the multiplicative split under a finite
+// uniaxial stretch (the log-strain form of each hardening law, plastic flow isochoric).
+#include <cmath>
+#include <memory>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "indentsim/materials/finite_strain.hpp"
+#include "indentsim/materials/finite_strain_law.hpp"
+#include "indentsim/materials/hardening.hpp"
+
+using namespace indentsim;
+
+namespace {
+
+const ElasticMaterial steel{200e9, 0.3};
+
+DeformationGradient gradient(double f11, double f12, double f21, double f22, double f33) {
+  return (DeformationGradient() << f11, f12, f21, f22, f33).finished();
+}
+/// R(theta) U: a rotation of the in-plane stretch (u1, u2) and the out-of-plane stretch u3.
+DeformationGradient rotated_stretch(double theta, double u1, double u2, double u3) {
+  const double c = std::cos(theta), s = std::sin(theta);
+  return gradient(c * u1, -s * u2, s * u1, c * u2, u3);
+}
+/// A random gradient within `size` of the identity, in-plane determinant positive.
+DeformationGradient random_gradient(std::mt19937& rng, double size) {
+  std::uniform_real_distribution<double> c(-size, size);
+  return gradient(1 + c(rng), c(rng), c(rng), 1 + c(rng), 1 + 0.5 * c(rng));
+}
+
+/// Central differences of a function of F, column by column.
+template <int Rows, class Of>
+Eigen::Matrix<double, Rows, 5> finite_differences(const Of& of, const DeformationGradient& F, double step = 1e-7) {
+  Eigen::Matrix<double, Rows, 5> fd;
+  for (int k = 0; k < 5; ++k) {
+    DeformationGradient plus = F, minus = F;
+    plus[k] += step;
+    minus[k] -= step;
+    fd.col(k) = (of(plus) - of(minus)) / (2 * step);
+  }
+  return fd;
+}
+
+std::unique_ptr<FiniteStrainPointLaw> hencky_elastic() { return std::make_unique<HenckyPointLaw>(steel, nullptr); }
+std::unique_ptr<FiniteStrainPointLaw> hencky_ilyushin() {
+  return std::make_unique<HenckyPointLaw>(
+      steel, std::make_unique<IlyushinPointLaw>(IlyushinLaw(steel, 0.003, HardeningLaw::power, 0.9, 0.2), false, 1));
+}
+std::unique_ptr<J2LogStrainPointLaw> j2_log(double n = 0.2) {
+  return std::make_unique<J2LogStrainPointLaw>(J2Law(steel, std::make_shared<PowerLawHardening>(400e6, steel.E, n)), 1);
+}
+
+}  // namespace
+
+TEST(FiniteStrain, TheLogarithmicStrainOfAStretchIsTheLogOfItsStretches) {
+  for (const auto& [u1, u2, u3] : {std::array{1.0, 1.0, 1.0}, std::array{1.5, 0.7, 1.0}, std::array{2.0, 2.0, 0.5},
+                                   std::array{0.3, 1.0, 1.2}, std::array{1.0 + 1e-9, 1.0, 1.0}}) {
+    const VoigtVector e = logarithmic_strain(gradient(u1, 0, 0, u2, u3), identity_tensor()).strain;
+    EXPECT_NEAR(e[0], std::log(u1), 1e-15);
+    EXPECT_NEAR(e[1], std::log(u2), 1e-15);
+    EXPECT_NEAR(e[2], 0.0, 1e-15);
+    EXPECT_NEAR(e[3], std::log(u3), 1e-15);
+  }
+}
+
+TEST(FiniteStrain, ARigidRotationStrainsAndStressesNothing) {
+  for (const double theta : {1e-3, 0.5, std::acos(-1.0) / 2, 2.5}) {
+    SCOPED_TRACE(theta);
+    const DeformationGradient R = rotated_stretch(theta, 1, 1, 1);
+    EXPECT_LE(logarithmic_strain(R, identity_tensor()).strain.norm(), 1e-15);
+    EXPECT_LE(hencky_elastic()->respond(0, R).nominal.norm(), 1e-15 * steel.E);
+    EXPECT_LE(hencky_ilyushin()->respond(0, R).nominal.norm(), 1e-15 * steel.E);
+    EXPECT_LE(j2_log()->respond(0, R).nominal.norm(), 1e-15 * steel.E);
+  }
+}
+
+TEST(FiniteStrain, ARotatedStretchHasTheRotatedStrainAndStress) {
+  // Objectivity: e(R U) = R ln(U) R^T and tau(R U) = R tau(U) R^T, here for a plastic J2 point.
+  const double theta = 0.7, c = std::cos(theta), s = std::sin(theta);
+  const auto rotate = [&](const VoigtVector& t, bool engineering) {
+    const double t12 = engineering ? 0.5 * t[2] : t[2];
+    const double a = c * c * t[0] - 2 * c * s * t12 + s * s * t[1];
+    const double d = s * s * t[0] + 2 * c * s * t12 + c * c * t[1];
+    const double b = c * s * (t[0] - t[1]) + (c * c - s * s) * t12;
+    return VoigtVector(a, d, engineering ? 2 * b : b, t[3]);
+  };
+  const DeformationGradient U = gradient(1.3, 0, 0, 0.8, 1.0), RU = rotated_stretch(theta, 1.3, 0.8, 1.0);
+  const VoigtVector e_u = logarithmic_strain(U, identity_tensor()).strain;
+  EXPECT_LE((logarithmic_strain(RU, identity_tensor()).strain - rotate(e_u, true)).norm(), 1e-14);
+  const auto law = j2_log();
+  const FiniteStrainResponse stretched = law->respond(0, U), turned = law->respond(0, RU);
+  EXPECT_TRUE(stretched.plastic);
+  EXPECT_LE((turned.kirchhoff - rotate(stretched.kirchhoff, false)).norm(), 1e-12 * stretched.kirchhoff.norm());
+}
+
+TEST(FiniteStrain, TheLogarithmicStrainsDerivativeMatchesCentralDifferences) {
+  std::mt19937 rng(13);
+  std::vector<std::pair<DeformationGradient, SymmetricTensor>> cases{
+      {identity_deformation(), identity_tensor()},                  // equal eigenvalues
+      {gradient(1.2, 0, 0, 1.2, 1.0), identity_tensor()},           // equal, stretched
+      {gradient(1.0, 1e-6, 0, 1.0, 1.0), identity_tensor()},        // nearly equal
+      {gradient(1.0, 0.8, 0, 1.0, 1.3), SymmetricTensor(1.1, 0.9, 0.05, 1.0 / 0.99)}};  // simple shear, a history
+  for (int k = 0; k < 20; ++k) cases.emplace_back(random_gradient(rng, k < 10 ? 0.05 : 0.6), identity_tensor());
+  for (const auto& [F, G] : cases) {
+    const LogarithmicStrain e = logarithmic_strain(F, G);
+    const auto fd = finite_differences<4>([&](const DeformationGradient& f) { return logarithmic_strain(f, G).strain; }, F);
+    EXPECT_LE((e.derivative - fd).cwiseAbs().maxCoeff(), 1e-7) << "F = " << F.transpose() << "\n" << e.derivative << "\n" << fd;
+  }
+}
+
+TEST(FiniteStrain, TheNominalTangentMatchesCentralDifferencesForEachLaw) {
+  std::mt19937 rng(17);
+  for (int trial = 0; trial < 20; ++trial) {
+    const DeformationGradient F = random_gradient(rng, trial < 10 ? 0.01 : 0.3);
+    std::vector<std::pair<std::string, std::unique_ptr<FiniteStrainPointLaw>>> laws;
+    laws.emplace_back("hencky elastic", hencky_elastic());
+    laws.emplace_back("hencky ilyushin", hencky_ilyushin());
+    // J2 from a plastic history (a first stretch committed), then another gradient.
+    auto j2 = j2_log();
+    j2->commit(0, random_gradient(rng, 0.2));
+    laws.emplace_back("j2 log strain", std::move(j2));
+    for (const auto& [name, law] : laws) {
+      SCOPED_TRACE(name);
+      const FiniteStrainResponse r = law->respond(0, F);
+      const auto fd = finite_differences<5>([&](const DeformationGradient& f) { return law->respond(0, f).nominal; }, F);
+      const double scale = r.tangent.cwiseAbs().maxCoeff();
+      EXPECT_LE((r.tangent - fd).cwiseAbs().maxCoeff(), 1e-6 * scale)
+          << "F = " << F.transpose() << " plastic " << r.plastic << "\n" << r.tangent << "\n" << fd;
+    }
+  }
+}
+
+TEST(FiniteStrain, SmallDeformationsGiveTheSmallStrainStress) {
+  // F = I + t H: P = sigma(sym H t) + O(t^2), so the relative difference falls as t.
+  const Eigen::Matrix<double, 5, 1> h = (Eigen::Matrix<double, 5, 1>() << 0.3, -0.5, 0.2, -0.4, 0.1).finished();
+  const ConstitutiveMatrix d = steel.stiffness();
+  double previous = 1.0;
+  for (const double t : {1e-3, 1e-4, 1e-5}) {
+    const DeformationGradient F = identity_deformation() + t * h;
+    const VoigtVector small_strain(t * h[0], t * h[3], t * (h[1] + h[2]), t * h[4]);
+    const VoigtVector sigma = d * small_strain;
+    const NominalStress p = hencky_elastic()->respond(0, F).nominal;
+    // P's 12 and 21 both tend to sigma12.
+    const Eigen::Matrix<double, 5, 1> expected =
+        (Eigen::Matrix<double, 5, 1>() << sigma[0], sigma[2], sigma[2], sigma[1], sigma[3]).finished();
+    const double relative = (p - expected).norm() / expected.norm();
+    EXPECT_LE(relative, 3.0 * t);
+    EXPECT_LT(relative, 0.2 * previous);
+    previous = relative;
+  }
+}
+
+TEST(FiniteStrain, J2UnderAFiniteUniaxialStretchFollowsItsFlowCurveInLogStrain) {
+  // Uniaxial Kirchhoff stress along 2 (P11 = P33 = 0 by lateral stretches): the log strain is
+  // additive, ln(stretch) = tau / E + eps_p, and tau = sigma_y(eps_p), to 1e-10, up to a stretch
+  // of 2.  The exponential map keeps det C_p = 1.
+  for (const double n : {0.0, 0.2}) {
+    SCOPED_TRACE(n);
+    const auto law = j2_log(n);
+    const PowerLawHardening curve(400e6, steel.E, n);
+    double lateral = 1.0;
+    for (int step = 1; step <= 40; ++step) {
+      const double stretch = std::exp(std::log(2.0) * step / 40.0);
+      FiniteStrainResponse r;
+      for (int iteration = 0; iteration < 50; ++iteration) {
+        const DeformationGradient F = gradient(lateral, 0, 0, stretch, lateral);
+        r = law->respond(0, F);
+        if (std::abs(r.nominal[0]) <= 1e-12 * std::abs(r.nominal[3])) break;
+        lateral -= r.nominal[0] / (r.tangent(0, 0) + r.tangent(0, 4));  // P11 = P33 by symmetry
+      }
+      const DeformationGradient F = gradient(lateral, 0, 0, stretch, lateral);
+      law->commit(0, F);
+      const double eps_p = law->state(0).equivalent_plastic_strain;
+      const double tau = r.kirchhoff[1];
+      if (eps_p == 0.0) continue;
+      EXPECT_NEAR(tau, curve.flow_stress(eps_p), 1e-10 * tau) << "step " << step;
+      EXPECT_NEAR(std::log(stretch), tau / steel.E + eps_p, 1e-10) << "step " << step;
+      const SymmetricTensor& g = law->state(0).inverse_plastic_metric;
+      EXPECT_NEAR((g[0] * g[1] - g[2] * g[2]) * g[3], 1.0, 1e-12);
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+#include "indentsim/geometry/kinematics.hpp"
+
+namespace {
+
+/// The element force and tangent of one element through a finite-strain law (points 0..3).
+struct ElementResponse {
+  ElementVector force;
+  ElementMatrix tangent;
+};
+ElementResponse respond(const FiniteStrainQuadrature& q, const FiniteStrainPointLaw& law, const ElementVector& ue,
+                        std::size_t first_point = 0) {
+  const auto F = q.law_gradients(ue);
+  std::array<NominalStress, 4> p;
+  std::array<NominalTangent, 4> a;
+  for (std::size_t g = 0; g < 4; ++g) {
+    const FiniteStrainResponse r = law.respond(first_point + g, F[g]);
+    p[g] = r.nominal;
+    a[g] = r.tangent;
+  }
+  return {q.internal_force(ue, p), q.stiffness(ue, p, a)};
+}
+
+/// The unknowns of a rectangle (left side at x0, bottom at y0) under u = (F - I) X (paper order:
+/// vertices (x0, y0), (x0, y0 + h), (x0 + w, y0), (x0 + w, y0 + h); u1 of the four, then u2).
+ElementVector homogeneous_unknowns(const Rectangle& rect, double y0, const Eigen::Matrix2d& f) {
+  const double xs[4] = {rect.x0, rect.x0, rect.x0 + rect.width, rect.x0 + rect.width};
+  const double ys[4] = {y0, y0 + rect.height, y0, y0 + rect.height};
+  ElementVector ue;
+  for (int q = 0; q < 4; ++q) {
+    const Eigen::Vector2d u = (f - Eigen::Matrix2d::Identity()) * Eigen::Vector2d(xs[q], ys[q]);
+    ue[q] = u[0];
+    ue[4 + q] = u[1];
+  }
+  return ue;
+}
+
+}  // namespace
+
+TEST(FiniteStrainPatch, HomogeneousDeformationsLeaveTheInteriorNodesInEquilibrium) {
+  // A graded 3x3 patch under u = (F - I) X: every Gauss point takes F itself (F-bar too, J being
+  // uniform), and the four interior nodes carry no force, to round-off.  Plane strain: a stretch
+  // and a simple shear; about the axis (off it, r from 0.4): a uniform compression.
+  struct Case {
+    const char* name;
+    SceneKind scene;
+    Eigen::Matrix2d f;
+  };
+  const std::vector<Case> cases{{"plane-strain stretch", SceneKind::plane_strain, (Eigen::Matrix2d() << 1.3, 0, 0, 0.8).finished()},
+                                {"simple shear", SceneKind::plane_strain, (Eigen::Matrix2d() << 1, 0.5, 0, 1).finished()},
+                                {"axisymmetric compression", SceneKind::axisymmetric,
+                                 (Eigen::Matrix2d() << 1.1, 0, 0, 0.85).finished()}};
+  const double xs[4] = {0.4, 0.7, 1.5, 1.8}, ys[4] = {-1.0, -0.6, -0.5, 0.0};
+  for (const auto& c : cases) {
+    for (const ElementKind kind : {ElementKind::q1, ElementKind::bbar}) {
+      for (int plastic = 0; plastic < 2; ++plastic) {
+        SCOPED_TRACE(std::string(c.name) + (kind == ElementKind::bbar ? " F-bar" : " Q1") + (plastic ? " J2" : " elastic"));
+        const auto kinematics = make_kinematics(c.scene);
+        std::unique_ptr<FiniteStrainPointLaw> law =
+            plastic ? std::unique_ptr<FiniteStrainPointLaw>(std::make_unique<J2LogStrainPointLaw>(
+                          J2Law(steel, std::make_shared<PowerLawHardening>(400e6, steel.E, 0.2)), 36))
+                    : hencky_elastic();
+        const double f33 = c.scene == SceneKind::axisymmetric ? c.f(0, 0) : 1.0;
+        const DeformationGradient expected = gradient(c.f(0, 0), c.f(0, 1), c.f(1, 0), c.f(1, 1), f33);
+        Eigen::Matrix<double, 2, 16> nodal = Eigen::Matrix<double, 2, 16>::Zero();  // node (i, j) = 4 i + j
+        double stress_scale = 0.0;
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j) {
+            const Rectangle rect{xs[i + 1] - xs[i], ys[j + 1] - ys[j], xs[i]};
+            const FiniteStrainQuadrature q = kinematics->finite_strain_quadrature(rect, kind);
+            const ElementVector ue = homogeneous_unknowns(rect, ys[j], c.f);
+            for (const DeformationGradient& F : q.law_gradients(ue)) EXPECT_LE((F - expected).norm(), 1e-14);
+            const ElementResponse r = respond(q, *law, ue, 4 * static_cast<std::size_t>(3 * i + j));
+            stress_scale = std::max(stress_scale, law->respond(0, expected).nominal.norm());
+            const int nodes[4] = {4 * i + j, 4 * i + j + 1, 4 * (i + 1) + j, 4 * (i + 1) + j + 1};
+            for (int v = 0; v < 4; ++v) {
+              nodal(0, nodes[v]) += r.force[v];
+              nodal(1, nodes[v]) += r.force[4 + v];
+            }
+          }
+        const double area_scale = 1.4 * 1.0 * (c.scene == SceneKind::axisymmetric ? 2 * 3.1416 * 1.8 : 1.0);
+        for (const int interior : {5, 6, 9, 10})
+          EXPECT_LE(nodal.col(interior).norm(), 1e-13 * stress_scale * area_scale) << "node " << interior;
+      }
+    }
+  }
+}
+
+TEST(FiniteStrainElement, TheTangentMatchesCentralDifferencesOfTheForce) {
+  // Material and geometric stiffness together, Q1 and F-bar, both kinematics, an elastic Hencky
+  // law and J2 from a plastic history; displacements of 10-30% of the element.
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<double> c(-0.3, 0.3);
+  for (const SceneKind scene : {SceneKind::plane_strain, SceneKind::axisymmetric}) {
+    for (const ElementKind kind : {ElementKind::q1, ElementKind::bbar}) {
+      SCOPED_TRACE(std::string(scene == SceneKind::axisymmetric ? "axisymmetric" : "plane strain") +
+                   (kind == ElementKind::bbar ? " F-bar" : " Q1"));
+      const Rectangle rect{0.5, 0.8, 0.3};
+      const FiniteStrainQuadrature q = make_kinematics(scene)->finite_strain_quadrature(rect, kind);
+      for (int trial = 0; trial < 6; ++trial) {
+        ElementVector ue;
+        for (double& v : ue) v = 0.3 * c(rng);
+        auto j2 = std::make_unique<J2LogStrainPointLaw>(J2Law(steel, std::make_shared<PowerLawHardening>(400e6, steel.E, 0.2)), 4);
+        const auto first = q.law_gradients(0.5 * ue);
+        for (std::size_t g = 0; g < 4; ++g) j2->commit(g, first[g]);
+        std::vector<std::unique_ptr<FiniteStrainPointLaw>> laws;
+        laws.push_back(hencky_elastic());
+        laws.push_back(std::move(j2));
+        for (const auto& law : laws) {
+          const ElementResponse r = respond(q, *law, ue);
+          ElementMatrix fd;
+          const double step = 1e-7;
+          for (int k = 0; k < 8; ++k) {
+            ElementVector plus = ue, minus = ue;
+            plus[k] += step;
+            minus[k] -= step;
+            fd.col(k) = (respond(q, *law, plus).force - respond(q, *law, minus).force) / (2 * step);
+          }
+          const double scale = r.tangent.cwiseAbs().maxCoeff();
+          EXPECT_LE((r.tangent - fd).cwiseAbs().maxCoeff(), 2e-6 * scale) << r.tangent << "\n\n" << fd;
+        }
+      }
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+#include "indentsim/solvers/finite_strain_bulk.hpp"
+
+namespace {
+/// A small graded block (x from the axis, y from -ly to 0) in the given scene and element.
+Mesh small_block(SceneKind scene, ElementKind kind) {
+  Mesh mesh({0.0, 0.3, 0.5, 0.9, 1.6}, {-1.5, -0.8, -0.4, -0.15, 0.0});
+  mesh.set_scene(scene);
+  mesh.set_element_kind(kind);
+  return mesh;
+}
+}  // namespace
+
+TEST(FiniteStrainBulk, AUniformCompressionOfTheBlockLeavesEveryInteriorNodeInEquilibrium) {
+  // u2 = (lambda - 1)(y + ly), u1 = 0: the homogeneous deformation the base and the axis allow.
+  // Assembled over the graded mesh, the internal force vanishes at every node off the boundary.
+  for (const SceneKind scene : {SceneKind::plane_strain, SceneKind::axisymmetric})
+    for (const ElementKind kind : {ElementKind::q1, ElementKind::bbar}) {
+      SCOPED_TRACE(std::string(scene == SceneKind::axisymmetric ? "axisymmetric" : "plane strain") +
+                   (kind == ElementKind::bbar ? " F-bar" : " Q1"));
+      const Mesh mesh = small_block(scene, kind);
+      const StiffnessPattern pattern(mesh);
+      const ElasticStiffness elastic(mesh, steel, pattern);
+      FiniteStrainBulk bulk(elastic, std::make_unique<J2LogStrainPointLaw>(
+                                         J2Law(steel, std::make_shared<PowerLawHardening>(400e6, steel.E, 0.2)),
+                                         4 * static_cast<std::size_t>(mesh.elements())));
+      std::vector<double> u(static_cast<std::size_t>(mesh.equations()), 0.0), f(u.size());
+      for (int i = 0; i < mesh.nodes_x(); ++i)
+        for (int j = 0; j < mesh.nodes_y(); ++j) {
+          const int e = mesh.equation(Mesh::dof_v(mesh.node(i, j)));
+          if (e >= 0) u[static_cast<std::size_t>(e)] = (0.7 - 1.0) * (mesh.y(j) + 1.5);
+        }
+      bulk.internal_force(u.data(), f.data());
+      double largest = 0.0;
+      for (double v : f) largest = std::max(largest, std::abs(v));
+      ASSERT_GT(largest, 0.0);
+      for (int i = 1; i + 1 < mesh.nodes_x(); ++i)
+        for (int j = 1; j + 1 < mesh.nodes_y(); ++j)
+          for (const int dof : {Mesh::dof_u(mesh.node(i, j)), Mesh::dof_v(mesh.node(i, j))})
+            EXPECT_LE(std::abs(f[static_cast<std::size_t>(mesh.equation(dof))]), 1e-12 * largest) << i << ", " << j;
+    }
+}
+
+TEST(FiniteStrainBulk, TheAssembledTangentMatchesCentralDifferencesOfTheInternalForce) {
+  std::mt19937 rng(29);
+  std::uniform_real_distribution<double> c(-0.05, 0.05);
+  for (const SceneKind scene : {SceneKind::plane_strain, SceneKind::axisymmetric})
+    for (const ElementKind kind : {ElementKind::q1, ElementKind::bbar}) {
+      SCOPED_TRACE(std::string(scene == SceneKind::axisymmetric ? "axisymmetric" : "plane strain") +
+                   (kind == ElementKind::bbar ? " F-bar" : " Q1"));
+      const Mesh mesh = small_block(scene, kind);
+      const StiffnessPattern pattern(mesh);
+      const ElasticStiffness elastic(mesh, steel, pattern);
+      FiniteStrainBulk bulk(elastic, std::make_unique<HenckyPointLaw>(steel, nullptr));
+      EXPECT_EQ(bulk.symmetric_tangent(), kind == ElementKind::q1);
+      const std::size_t n = static_cast<std::size_t>(mesh.equations());
+      std::vector<double> u(n), values(static_cast<std::size_t>(pattern.nonzeros()));
+      for (double& v : u) v = c(rng);
+      bulk.tangent(u.data(), values.data());
+      // Column k of the tangent by central differences, against K e_k from the pattern.
+      const double step = 1e-7;
+      double worst = 0.0, scale = 0.0;
+      for (std::size_t k = 0; k < n; ++k) {
+        std::vector<double> plus = u, minus = u, f_plus(n), f_minus(n), unit(n, 0.0), column(n);
+        plus[k] += step;
+        minus[k] -= step;
+        bulk.internal_force(plus.data(), f_plus.data());
+        bulk.internal_force(minus.data(), f_minus.data());
+        unit[k] = 1.0;
+        pattern.multiply(values, unit.data(), column.data());
+        for (std::size_t i = 0; i < n; ++i) {
+          worst = std::max(worst, std::abs(column[i] - (f_plus[i] - f_minus[i]) / (2 * step)));
+          scale = std::max(scale, std::abs(column[i]));
+        }
+      }
+      EXPECT_LE(worst, 1e-6 * scale);
+    }
+}
