@@ -6,6 +6,7 @@
 #include <memory>
 #include <random>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include "indentsim/materials/finite_strain.hpp"
@@ -388,4 +389,184 @@ TEST(FiniteStrainBulk, TheAssembledTangentMatchesCentralDifferencesOfTheInternal
       }
       EXPECT_LE(worst, 1e-6 * scale);
     }
+}
+
+// ---------------------------------------------------------------------------------------------
+#include "indentsim/solvers/current_configuration_contact.hpp"
+#include "indentsim/solvers/solver.hpp"
+#include "indentsim/simulation/run_configuration.hpp"
+#include "test_support.hpp"
+
+TEST(CurrentConfigurationContact, TheJacobianRowsAreTheResidualsDerivative) {
+  // Surfaces pressed onto a cone and a sphere (some candidates past the punch, some short of it)
+  // with horizontal displacements that move the nodes along its face; the bulk in finite strain.
+  // The Newton Jacobian of the whole system against central differences of its residual.
+  for (const char* name : {"axisymmetric/berkovich_cone.toml", "axisymmetric/elastic_sphere.toml", "elastic.toml"}) {
+    SCOPED_TRACE(name);
+    const LoadCase lc = indentsim::testing::shipped_case(name, {"mesh.contact_nodes=8", "geometry.strain=\"finite\""});
+    Mesh mesh = Mesh::from_plan(lc, plan_mesh(lc));
+    mesh.set_element_kind(ElementKind::bbar);
+    const StiffnessPattern pattern(mesh);
+    const ElasticMaterial material{lc.material.E, lc.material.nu};
+    ElasticStiffness k(mesh, material, pattern);
+    FiniteStrainBulk bulk(k, std::make_unique<HenckyPointLaw>(material, nullptr));
+    CurrentConfigurationContact contact(mesh, make_punch(lc.punch), pattern, k.values());
+    ContactEquations equations(pattern, bulk, k, contact);
+    const auto& cs = contact.candidates();
+    ASSERT_GE(cs.size(), 12u);
+    // The punch reaching the 8th candidate; the surface's displacement fading with depth over 20
+    // elements, so that strains stay at a few percent and no element turns over.
+    const auto punch = make_punch(lc.punch);
+    const double alpha = punch->surface_height(cs[8].x), fade = 20.0 * mesh.x(1);
+    const auto n = static_cast<std::size_t>(mesh.equations());
+    std::mt19937 random(7);
+    std::uniform_real_distribution<double> unit(-1.0, 1.0);
+    std::vector<double> u(n, 0.0);
+    for (std::size_t i = 0; i < cs.size(); ++i) {
+      const double inward = i > 0 && i < 12 ? -0.1 * alpha * (1.0 + 0.5 * unit(random)) : 0.0;
+      const double x = cs[i].x + inward;
+      // Past the punch by up to 4% of the depth where it reaches below the surface, else at rest;
+      // every fourth node short of it (open).
+      const double reach = std::max(0.0, alpha - punch->surface_height(x));
+      double down = reach > 0.0 ? -reach - 0.02 * (1.0 + unit(random)) * alpha : 0.0;
+      if (reach > 0.0 && i % 4 == 3) down = -reach + 0.05 * alpha;
+      const int column = static_cast<int>(i);
+      for (int j = 0; j < mesh.nodes_y(); ++j) {
+        const double decay = std::exp(mesh.y(j) / fade);
+        const int node = mesh.node(column, j);
+        if (const int e = mesh.equation(Mesh::dof_u(node)); e >= 0) u[static_cast<std::size_t>(e)] = inward * decay;
+        if (const int e = mesh.equation(Mesh::dof_v(node)); e >= 0) u[static_cast<std::size_t>(e)] = down * decay;
+      }
+    }
+    std::vector<double> values(static_cast<std::size_t>(pattern.nonzeros())), f(n), f_plus(n), f_minus(n), jd(n);
+    equations.residual(u.data(), alpha, f.data());
+    equations.jacobian(u.data(), alpha, values.data());
+    std::vector<double> direction(n, 0.0);
+    // A step of 1e-6 of the depth: the nonlinear bulk's central differences err by ~1e-12 there,
+    // and the active set stays.
+    for (std::size_t i = 0; i < n; ++i) direction[i] = alpha * unit(random);
+    pattern.multiply(values, direction.data(), jd.data());
+    const double step = 1e-6;
+    std::vector<double> plus = u, minus = u;
+    for (std::size_t i = 0; i < n; ++i) {
+      plus[i] += step * direction[i];
+      minus[i] -= step * direction[i];
+    }
+    equations.residual(plus.data(), alpha, f_plus.data());
+    equations.residual(minus.data(), alpha, f_minus.data());
+    double scale = 0.0;
+    for (std::size_t i = 0; i < n; ++i) scale = std::max(scale, std::abs(jd[i]));
+    int active = 0;
+    for (std::size_t i = 0; i < n; ++i)
+      EXPECT_NEAR((f_plus[i] - f_minus[i]) / (2.0 * step), jd[i], 1e-6 * scale) << "equation " << i;
+    std::vector<double> force(n);
+    bulk.internal_force(u.data(), force.data());
+    for (const char on : contact.evaluate(u.data(), force.data(), alpha).in_contact) active += on;
+    EXPECT_GT(active, 2);
+    EXPECT_LT(active, static_cast<int>(cs.size()));
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+#include "indentsim/base/error.hpp"
+#include "indentsim/simulation/simulation.hpp"
+
+namespace {
+double peak_force(const LoadCase& lc) {
+  Simulation sim(lc);
+  sim.run();
+  return sim.contact().force;
+}
+}  // namespace
+
+TEST(FiniteStrainRun, ShallowIndentationsApproachTheSmallStrainForceAsTheContactShrinks) {
+  // An elastic sphere at alpha / R = 1e-4, 1e-3, 1e-2: finite strain's force exceeds small
+  // strain's by a geometric share of the order of a / R = sqrt(alpha / R) -- measured 2.0e-3,
+  // 6.3e-3, 2.0e-2 -- so the difference falls by about sqrt(10) per decade of depth.
+  std::vector<double> excess;
+  for (const char* depth : {"1e-7", "1e-6", "1e-5"}) {
+    const std::vector<std::string> common{std::string("load.path=[0, ") + depth + "]", "load.increments=4",
+                                          "mesh.error_estimate=\"off\"", "mesh.contact_nodes=12"};
+    auto finite = common;
+    finite.push_back("geometry.strain=\"finite\"");
+    const double small = peak_force(indentsim::testing::shipped_case("axisymmetric/elastic_sphere.toml", common));
+    excess.push_back(peak_force(indentsim::testing::shipped_case("axisymmetric/elastic_sphere.toml", finite)) / small - 1.0);
+  }
+  RecordProperty("excess", fmt::format("{:.3e} {:.3e} {:.3e}", excess[0], excess[1], excess[2]));
+  EXPECT_GT(excess[0], 0.0);
+  EXPECT_LT(excess[0], 4e-3);
+  for (std::size_t k = 1; k < excess.size(); ++k) {
+    EXPECT_GT(excess[k] / excess[k - 1], 2.0);
+    EXPECT_LT(excess[k] / excess[k - 1], 5.0);
+  }
+}
+
+TEST(FiniteStrainRun, TheExactUnloadingStiffnessIsTheSlopeOfTheFirstUnloadingStep) {
+  // The unloading stiffness of finite strain is the linearization along its own tangent (the
+  // geometric terms and the contact on the current surface included): an unloading step of 1e-4
+  // of the depth falls along it to the step's own first-order error.  Elastic cone (every node
+  // in contact stays) and J2 sphere (elastic unloading from the plastic state).
+  for (const auto& [name, model] : {std::pair{"axisymmetric/berkovich_cone.toml", "elastic"},
+                                    std::pair{"axisymmetric/steel_sphere.toml", "j2"}}) {
+    SCOPED_TRACE(name);
+    LoadCase lc = indentsim::testing::shipped_case(
+        name, {"geometry.strain=\"finite\"", std::string("material.model=\"") + model + "\"", "mesh.contact_nodes=10",
+               "mesh.error_estimate=\"off\""});
+    const double depth = lc.max_depth();
+    lc.load.path = {0.0, depth, (1.0 - 1e-4) * depth};
+    lc.load.segment_increments = {6, 1};
+    lc.load.increments = 7;
+    validate(lc);
+    Simulation sim(lc);
+    double s_exact = 0.0, p_peak = 0.0, p_after = 0.0;
+    sim.run([&](const IncrementRecord& r) {
+      if (r.step == 6) {
+        s_exact = sim.unloading_stiffness();
+        p_peak = r.force;
+      }
+      if (r.step == 7) p_after = r.force;
+    });
+    const double slope = (p_peak - p_after) / (1e-4 * depth);
+    EXPECT_NEAR(slope / s_exact, 1.0, 2e-3) << "S exact " << s_exact << ", slope " << slope;
+  }
+}
+
+TEST(FiniteStrainRun, UnbuiltCombinationsAreRefusedNamingTheKey) {
+  const auto refused = [](std::vector<std::string> overrides, const std::string& key) {
+    overrides.push_back("geometry.strain=\"finite\"");
+    try {
+      indentsim::testing::shipped_case("axisymmetric/elastic_sphere.toml", overrides);
+      ADD_FAILURE() << "accepted";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.key(), key) << e.what();
+    }
+  };
+  refused({"contact.discretization=\"integrated_gap\""}, "geometry.strain");
+  refused({"contact.friction=0.2"}, "geometry.strain");
+  refused({"solver.linear=\"cholmod\""}, "solver.linear");
+}
+
+#include <csignal>
+
+class FiniteStrainCli : public indentsim::testing::CliTest {};
+
+TEST_F(FiniteStrainCli, AFiniteStrainJ2RunKilledWhileLoadingAndUnloadingResumesToTheSameCurve) {
+  // The checkpoint carries C_p^-1 and the equivalent plastic strain of every point: resumed runs
+  // end bit for bit where the uninterrupted one did.  summary.json names the kinematics.
+  const std::string source = indentsim::testing::source_path("loadcases/axisymmetric/steel_sphere.toml");
+  const std::string args = " --quiet --set geometry.strain=\\\"finite\\\" --set mesh.contact_nodes=8 "
+                           "--set load.increments=[6,4,1] --set mesh.error_estimate=\\\"off\\\" "
+                           "--set output.checkpoint_every=2";
+  ASSERT_EQ(cli("run " + source + args + " --out " + (dir_ / "full").string()), 0) << err();
+  const std::string expected = indentsim::testing::curve_without_timing(dir_ / "full" / "curve.csv");
+  for (const char* fault : {"increment:4", "increment:8"}) {
+    SCOPED_TRACE(fault);
+    const auto out = dir_ / (std::string("killed_") + fault[10]);
+    EXPECT_EQ(cli("run " + source + args + " --out " + out.string(), std::string("INDENTSIM_FAULT=") + fault),
+              128 + SIGKILL);
+    ASSERT_EQ(cli("resume " + (out / "checkpoints").string() + " --quiet"), 0) << err();
+    EXPECT_EQ(indentsim::testing::curve_without_timing(out / "curve.csv"), expected);
+  }
+  EXPECT_NE(indentsim::testing::slurp(dir_ / "full" / "case.toml").find("strain = \"finite\""), std::string::npos);
+  EXPECT_NE(indentsim::testing::slurp(dir_ / "full" / "summary.json").find("\"strain\": \"finite\""), std::string::npos);
 }

@@ -160,6 +160,11 @@ const std::vector<KeyDeclaration>& key_declarations() {
                             "plane_strain (a long punch on a block, P per unit thickness in N/m), axisymmetric (a "
                             "punch of revolution on a cylindrical specimen, P in N)"},
                            scene_names, [](auto& c) -> auto& { return c.geometry.kind; }));
+    k.push_back(choice_key({"geometry", "strain", "choice", "", "",
+                            "small (the paper's: linearized strain, the gap at the undeformed surface); finite "
+                            "(total Lagrangian, Hencky strain, J2 in the multiplicative split, F-bar for bbar, the gap "
+                            "at the surface's current position; KLU; node_to_rigid contact without friction)"},
+                           strain_names, [](auto& c) -> auto& { return c.geometry.strain; }));
     {
       const auto lx = [](auto& c) -> auto& { return c.geometry.lx; };
       const auto ly = [](auto& c) -> auto& { return c.geometry.ly; };

@@ -43,6 +43,7 @@ std::string to_string(MaterialModel model) { return name_of(model_names, model);
 std::string to_string(HardeningLaw law) { return name_of(hardening_names, law); }
 std::string to_string(TableExtension extension) { return name_of(table_extension_names, extension); }
 std::string to_string(SceneKind kind) { return name_of(scene_names, kind); }
+std::string to_string(StrainChoice strain) { return name_of(strain_names, strain); }
 std::string to_string(PunchShapeKind shape) { return name_of(shape_names, shape); }
 
 namespace input_detail {

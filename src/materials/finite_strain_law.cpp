@@ -27,6 +27,12 @@ FiniteStrainResponse HenckyPointLaw::respond(std::size_t point, const Deformatio
   return r;
 }
 
+NominalTangent HenckyPointLaw::unloading_tangent(std::size_t point, const DeformationGradient& F) const {
+  const LogarithmicStrain e = logarithmic_strain(F, identity_tensor());
+  const VoigtVector tau = law_ ? law_->respond(point, e.strain).stress : VoigtVector(elastic_ * e.strain);
+  return nominal_response(F, tau, elastic_, e.derivative).tangent;
+}
+
 void HenckyPointLaw::commit(std::size_t point, const DeformationGradient& F) {
   if (law_) law_->commit(point, logarithmic_strain(F, identity_tensor()).strain);
 }
@@ -69,6 +75,13 @@ FiniteStrainResponse J2LogStrainPointLaw::respond(const DeformationGradient& F, 
 
 FiniteStrainResponse J2LogStrainPointLaw::respond(std::size_t point, const DeformationGradient& F) const {
   return respond(F, state_[point], nullptr);
+}
+
+NominalTangent J2LogStrainPointLaw::unloading_tangent(std::size_t point, const DeformationGradient& F) const {
+  const LogarithmicStrain trial = logarithmic_strain(F, state_[point].inverse_plastic_metric);
+  J2State small;
+  small.equivalent_plastic_strain = state_[point].equivalent_plastic_strain;
+  return nominal_response(F, law_.respond(trial.strain, small).stress, law_.elastic_stiffness(), trial.derivative).tangent;
 }
 
 void J2LogStrainPointLaw::commit(std::size_t point, const DeformationGradient& F) {

@@ -33,7 +33,7 @@ nlohmann::ordered_json run_fields(const LoadCase& lc) {
   const bool axisymmetric = lc.geometry.kind == SceneKind::axisymmetric;
   nlohmann::ordered_json j;
   j["indentsim"] = version_line();
-  j["scene"] = {{"kind", to_string(lc.geometry.kind)}, {"punch", to_string(lc.punch.shape)}};
+  j["scene"] = {{"kind", to_string(lc.geometry.kind)}, {"strain", to_string(lc.geometry.strain)}, {"punch", to_string(lc.punch.shape)}};
   j["units"] = {{"depth", "m"},
                 {"force", axisymmetric ? "N (the whole specimen)" : "N/m (per unit thickness, both halves)"},
                 {"stiffness", axisymmetric ? "N/m" : "N/m per m"},

@@ -213,7 +213,10 @@ RunConfiguration resolve_choices(const LoadCase& lc, const RunPlan& plan, const 
     c.near_field = *near_field;
     c.plan.plastic_zone = {};
   } else if (plan.plastic_zone.empty()) {
-    c.near_field = choose_near_field(lc, mesh, plan.mesh, plastic, std::nullopt);
+    // Finite strain integrates the near elements nonlinearly even when elastic: they are planned
+    // as a plastic zone's would be (2.5 a), so that the run does not grow them increment by increment.
+    c.near_field = choose_near_field(lc, mesh, plan.mesh, plastic || lc.geometry.strain == StrainChoice::finite,
+                                     std::nullopt);
   } else {
     // Whether to condense is decided on the zone of the deepest point; the near field starts as
     // large as the first increments need and grows with the zone (Simulation::anticipate_plastic_zone).
@@ -229,7 +232,9 @@ RunConfiguration resolve_choices(const LoadCase& lc, const RunPlan& plan, const 
   const int candidates = contact_candidate_count(mesh, *make_punch(lc.punch));
   for (int i = 0; i < candidates; ++i) {
     candidate_equations.push_back(mesh.equation(Mesh::dof_v(mesh.node(i, mesh.top_row()))));
-    if (lc.contact.friction > 0.0) tangential_equations.push_back(mesh.equation(Mesh::dof_u(mesh.node(i, mesh.top_row()))));
+    // Friction and the contact on the current surface write rows on the horizontal unknowns too.
+    if (lc.contact.friction > 0.0 || lc.geometry.strain == StrainChoice::finite)
+      tangential_equations.push_back(mesh.equation(Mesh::dof_u(mesh.node(i, mesh.top_row()))));
   }
   const auto unknowns_of = [&](const NearField& near) -> std::int64_t {
     if (!near.condensed) return c.unknowns;
@@ -251,6 +256,8 @@ RunConfiguration resolve_choices(const LoadCase& lc, const RunPlan& plan, const 
   c.linear_solver = choose_linear_solver(lc.solver.linear, static_cast<int>(largest));
   // Sliding friction's rows are unsymmetric (docs/MODEL.md §3.3): only KLU factors them.
   if (lc.contact.friction > 0.0 && std::isfinite(lc.contact.friction)) c.linear_solver = LinearSolverKind::klu;
+  // So are the rows of finite strain's contact and F-bar's tangent (docs/MODEL.md §12).
+  if (lc.geometry.strain == StrainChoice::finite) c.linear_solver = LinearSolverKind::klu;
   c.companion_contact_nodes = companion_contact_nodes(lc);
   return c;
 }

@@ -2,6 +2,8 @@
 #include "indentsim/solvers/unloading_stiffness.hpp"
 #include "indentsim/solvers/coulomb_contact.hpp"
 #include "indentsim/solvers/integrated_gap_contact.hpp"
+#include "indentsim/solvers/current_configuration_contact.hpp"
+#include "indentsim/solvers/finite_strain_bulk.hpp"
 #include "indentsim/base/worker_threads.hpp"
 
 #include "indentsim/base/interruption.hpp"
@@ -77,8 +79,21 @@ void Simulation::build(const RunConfiguration& configuration, const std::optiona
   pattern_ = std::make_unique<StiffnessPattern>(*mesh_);
   stiffness_ = std::make_unique<ElasticStiffness>(*mesh_, material, *pattern_);
   bulk_ = stiffness_.get();
-  if (m.model != MaterialModel::elastic) {
-    const std::size_t points = 4 * static_cast<std::size_t>(mesh_->elements());
+  const std::size_t points = 4 * static_cast<std::size_t>(mesh_->elements());
+  if (load_case_.geometry.strain == StrainChoice::finite) {
+    // docs/MODEL.md §12: the laws of the logarithmic strain, the bulk in finite strain, the
+    // contact on the current surface -- every run, elastic ones too.
+    std::unique_ptr<FiniteStrainPointLaw> finite_law;
+    if (m.model == MaterialModel::j2)
+      finite_law = std::make_unique<J2LogStrainPointLaw>(J2Law(material, make_hardening_curve(m)), points);
+    else if (m.model == MaterialModel::ilyushin)
+      finite_law = std::make_unique<HenckyPointLaw>(
+          material, std::make_unique<IlyushinPointLaw>(*law, unloads(load_case_.load.path), points));
+    else
+      finite_law = std::make_unique<HenckyPointLaw>(material, nullptr);
+    plastic_ = std::make_unique<FiniteStrainBulk>(*stiffness_, std::move(finite_law));
+    bulk_ = plastic_.get();
+  } else if (m.model != MaterialModel::elastic) {
     std::unique_ptr<PointLaw> point_law;
     if (m.model == MaterialModel::j2)
       point_law = std::make_unique<J2PointLaw>(J2Law(material, make_hardening_curve(m)), points);
@@ -86,7 +101,10 @@ void Simulation::build(const RunConfiguration& configuration, const std::optiona
     plastic_ = std::make_unique<InelasticBulk>(*stiffness_, std::move(point_law));
     bulk_ = plastic_.get();
   }
-  if (load_case_.contact.discretization == ContactDiscretizationChoice::integrated_gap)
+  if (load_case_.geometry.strain == StrainChoice::finite)
+    contact_ = std::make_unique<CurrentConfigurationContact>(*mesh_, make_punch(load_case_.punch), *pattern_,
+                                                             stiffness_->values());
+  else if (load_case_.contact.discretization == ContactDiscretizationChoice::integrated_gap)
     contact_ = std::make_unique<IntegratedGapContact>(*mesh_, make_punch(load_case_.punch), *pattern_,
                                                       stiffness_->values(), load_case_.contact.penalty);
   else if (load_case_.contact.friction > 0.0)
@@ -427,6 +445,11 @@ double Simulation::unloading_stiffness(const ContactResult& c) const {
   std::vector<double> internal_force(state_.u.size());
   if (!contact_->rows_pin_unknowns() || contact_->carries_history())
     bulk_->internal_force(state_.u.data(), internal_force.data());
+  // Finite strain unloads along its tangent at the state, not along K.
+  if (plastic_)
+    if (const auto tangent = plastic_->unloading_tangent(state_.u.data()))
+      return unloading_stiffness_of_tangent(*pattern_, *tangent, *contact_, state_.u.data(), internal_force.data(),
+                                            state_.alpha);
   return elastic_unloading_stiffness(*stiffness_, *contact_, state_.u.data(), internal_force.data(), state_.alpha, c);
 }
 

@@ -70,6 +70,22 @@ void FiniteStrainBulk::add_tangent_corrections(const std::vector<ElementSlot>& s
   }
 }
 
+std::optional<std::vector<double>> FiniteStrainBulk::unloading_tangent(const double* u) const {
+  std::vector<double> values = elastic_.values();
+  for (const ElementSlot& slot : slots_) {
+    const ElementVector ue = gather(mesh_, slot.ei, slot.ej, u);
+    const FiniteStrainQuadrature& q = quadrature(slot.ei, slot.ej);
+    KeptResponse r = respond(slot.ei, slot.ej, ue);
+    const auto F = q.law_gradients(ue);
+    const std::size_t first = 4 * static_cast<std::size_t>(mesh_.element(slot.ei, slot.ej));
+    for (std::size_t g = 0; g < 4; ++g) r.tangent[g] = law_->unloading_tangent(first + g, F[g]);
+    const ElementMatrix correction = q.stiffness(ue, r.stress, r.tangent) - elastic_.cached_matrix(slot.ei, slot.ej);
+    for (int p = 0; p < 64; ++p)
+      if (slot.positions[p] >= 0) values[static_cast<std::size_t>(slot.positions[p])] += correction(p / 8, p % 8);
+  }
+  return values;
+}
+
 bool FiniteStrainBulk::departs_at(int ei, int ej, const double* u) const {
   const ElementVector ue = gather(mesh_, ei, ej, u);
   const FiniteStrainQuadrature& q = quadrature(ei, ej);

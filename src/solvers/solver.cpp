@@ -181,6 +181,10 @@ struct NewtonSolver::Impl {
     const double* point = N_VGetArrayPointer(u);
     me->equations.residual(point, me->alpha, N_VGetArrayPointer(f));
     const double norm = max_norm(f) / me->settings.force_scale;
+    // A trial point where the residual is not finite (finite strain: an element turned inside
+    // out, det F <= 0) is a recoverable failure: KINSOL shortens the step.
+    const double* values = N_VGetArrayPointer(f);
+    if (!std::all_of(values, values + N_VGetLength(f), [](double v) { return std::isfinite(v); })) return 1;
     // Bounded: a solve that never converges must not grow memory without end.
     if (me->residual_history.size() < max_residual_history) me->residual_history.push_back(norm);
     me->remember_if_best(point, norm);

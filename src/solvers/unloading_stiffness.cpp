@@ -27,11 +27,12 @@ Eigen::SparseMatrix<double> sparse_matrix(const StiffnessPattern& pattern, const
   return matrix;
 }
 
-// Rows that do not pin unknowns: the elastic stiffness with the contact's own Jacobian rows,
-// J w = -dF/d(alpha), and dP/d(alpha) = -f sum_k (K w)_k over the candidates.
-double linearized_unloading_stiffness(const ElasticStiffness& stiffness, const ContactDiscretization& contact,
-                                      const double* u, const double* internal_force, double alpha) {
-  const StiffnessPattern& pattern = stiffness.pattern();
+// Rows that do not pin unknowns: the bulk's unloading operator T (K, or finite strain's tangent)
+// with the contact's own Jacobian rows, J w = -dF/d(alpha), and dP/d(alpha) = -f sum_k (T w)_k
+// over the candidates' vertical rows (an open one holds (T w)_k = 0).
+double linearized_unloading_stiffness(const StiffnessPattern& pattern, const std::vector<double>& tangent,
+                                      const ContactDiscretization& contact, const double* u,
+                                      const double* internal_force, double alpha) {
   const auto n = static_cast<Eigen::Index>(pattern.size());
   const auto& rows = contact.row_equations();
   std::vector<double> row_force(rows.size());
@@ -40,7 +41,7 @@ double linearized_unloading_stiffness(const ElasticStiffness& stiffness, const C
     row_force[i] = internal_force[rows[i]];
     row_positions.push_back(pattern.row_positions(rows[i]));
   }
-  std::vector<double> jacobian = stiffness.values();
+  std::vector<double> jacobian = tangent;
   contact.write_jacobian_rows(u, alpha, row_force.data(), pattern, row_positions, jacobian.data());
   std::vector<double> d_alpha(static_cast<std::size_t>(n), 0.0);
   contact.write_depth_derivative_rows(u, alpha, row_force.data(), d_alpha.data());
@@ -59,9 +60,9 @@ double linearized_unloading_stiffness(const ElasticStiffness& stiffness, const C
     w = factor.solve(rhs);
   }
   std::vector<double> reaction(static_cast<std::size_t>(n));
-  pattern.multiply(stiffness.values(), w.data(), reaction.data());
+  pattern.multiply(tangent, w.data(), reaction.data());
   double rate = 0.0;
-  for (int equation : rows) rate -= reaction[static_cast<std::size_t>(equation)];
+  for (const ContactCandidate& c : contact.candidates()) rate -= reaction[static_cast<std::size_t>(c.equation)];
   return contact.symmetry_factor() * rate;
 }
 
@@ -126,7 +127,7 @@ double elastic_unloading_stiffness(const ElasticStiffness& stiffness, const Cont
   if (contact.carries_history())
     return incremental_unloading_stiffness(stiffness, contact, u, internal_force, alpha, state);
   if (!contact.rows_pin_unknowns())
-    return linearized_unloading_stiffness(stiffness, contact, u, internal_force, alpha);
+    return linearized_unloading_stiffness(stiffness.pattern(), stiffness.values(), contact, u, internal_force, alpha);
   const StiffnessPattern& pattern = stiffness.pattern();
   const std::vector<double>& values = stiffness.values();
   const auto n = static_cast<Eigen::Index>(pattern.size());
@@ -172,6 +173,14 @@ double elastic_unloading_stiffness(const ElasticStiffness& stiffness, const Cont
   for (std::size_t k = 0; k < candidates.size(); ++k)
     if (state.in_contact[k]) rate -= reaction[static_cast<std::size_t>(candidates[k].equation)];
   return contact.symmetry_factor() * rate;
+}
+
+double unloading_stiffness_of_tangent(const StiffnessPattern& pattern, const std::vector<double>& tangent,
+                                      const ContactDiscretization& contact, const double* u,
+                                      const double* internal_force, double alpha) {
+  if (contact.carries_history())
+    throw std::logic_error("the unloading stiffness of a finite-strain tangent with contact rows that carry history");
+  return linearized_unloading_stiffness(pattern, tangent, contact, u, internal_force, alpha);
 }
 
 }  // namespace indentsim

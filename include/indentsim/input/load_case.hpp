@@ -15,9 +15,13 @@ namespace indentsim {
 /// The scene: plane strain (a long cylinder or wedge on a block, per unit thickness) or
 /// axisymmetry (a body of revolution on a cylindrical specimen).
 enum class SceneKind { plane_strain, axisymmetric };
+/// The kinematics of the specimen: small strain (the paper's), or finite strain with contact on
+/// the current configuration (docs/MODEL.md §12).
+enum class StrainChoice { small, finite };
 
 struct GeometryInput {
   SceneKind kind = SceneKind::plane_strain;
+  StrainChoice strain = StrainChoice::small;
   double lx = 15e-3;  ///< block width of the half model, or the specimen's radius [m]
   double ly = 10e-3;  ///< block depth, or the specimen's height [m]
 };
@@ -256,6 +260,7 @@ std::string first_physics_difference(const LoadCase& a, const LoadCase& b);
 
 std::string to_string(MaterialModel model);
 std::string to_string(SceneKind kind);
+std::string to_string(StrainChoice strain);
 std::string to_string(PunchShapeKind shape);
 std::string to_string(HardeningLaw law);
 std::string to_string(TableExtension extension);

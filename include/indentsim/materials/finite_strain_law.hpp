@@ -34,6 +34,10 @@ class FiniteStrainPointLaw {
 public:
   virtual ~FiniteStrainPointLaw() = default;
   virtual FiniteStrainResponse respond(std::size_t point, const DeformationGradient& F) const = 0;
+  /// dP/dF of the elastic unloading from the committed state at F (the state's stress, the
+  /// elastic moduli: J2's elastic predictor, Ilyushin's unloading theorem), for the exact
+  /// unloading stiffness.
+  virtual NominalTangent unloading_tangent(std::size_t point, const DeformationGradient& F) const = 0;
   /// Accepts F as the converged state of the point.
   virtual void commit(std::size_t point, const DeformationGradient& F) = 0;
   virtual bool has_yielded(std::size_t point) const = 0;
@@ -52,6 +56,7 @@ public:
   /// `law` may be null (elasticity).
   HenckyPointLaw(const ElasticMaterial& elastic, std::unique_ptr<PointLaw> law);
   FiniteStrainResponse respond(std::size_t point, const DeformationGradient& F) const override;
+  NominalTangent unloading_tangent(std::size_t point, const DeformationGradient& F) const override;
   void commit(std::size_t point, const DeformationGradient& F) override;
   bool has_yielded(std::size_t point) const override { return law_ && law_->has_yielded(point); }
   void set_loading(bool beyond_previous_peak) override {
@@ -79,6 +84,7 @@ class J2LogStrainPointLaw final : public FiniteStrainPointLaw {
 public:
   J2LogStrainPointLaw(const J2Law& law, std::size_t points);
   FiniteStrainResponse respond(std::size_t point, const DeformationGradient& F) const override;
+  NominalTangent unloading_tangent(std::size_t point, const DeformationGradient& F) const override;
   void commit(std::size_t point, const DeformationGradient& F) override;
   bool has_yielded(std::size_t point) const override { return state_[point].equivalent_plastic_strain > 0.0; }
   std::vector<double> history() const override;

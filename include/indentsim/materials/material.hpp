@@ -128,6 +128,8 @@ public:
   J2Response respond(const VoigtVector& strain, const J2State& old) const;
   const HardeningCurve& hardening() const { return *hardening_; }
   double shear_modulus() const { return mu_; }
+  /// The elastic moduli D (the tangent of an elastic step).
+  ConstitutiveMatrix elastic_stiffness() const { return isotropic_stiffness({bulk_ - 2.0 * mu_ / 3.0, mu_}); }
   double initial_yield() const { return initial_yield_; }
 
 private:

@@ -45,6 +45,8 @@ public:
     law_->set_loading(beyond_previous_peak);
   }
   bool symmetric_tangent() const override;
+  /// Every element in finite strain with the laws' unloading tangents (the state's stress, elastic moduli).
+  std::optional<std::vector<double>> unloading_tangent(const double* u) const override;
   const std::vector<ElementSlot>& slots() const override { return slots_; }
   /// The largest |grad u| component over the elements outside `near` slots at the committed
   /// state (the far field's strain, for the check that it may stay small).

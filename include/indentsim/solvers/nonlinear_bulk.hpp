@@ -7,6 +7,7 @@
 //   FiniteStrainBulk   finite strain: every element of the system, through a
 //                      FiniteStrainPointLaw of the deformation gradient (solvers/finite_strain_bulk.hpp).
 #include <cstddef>
+#include <optional>
 #include <vector>
 
 #include "indentsim/materials/material_parameter.hpp"
@@ -40,6 +41,10 @@ public:
   /// Hands the law d eps / d theta from a displacement sensitivity (InelasticBulk's Ilyushin peak).
   virtual void record_strain_derivatives(const std::vector<ElementSlot>& /*slots*/, const double* /*du*/,
                                          MaterialParameter /*parameter*/) {}
+  /// The tangent of the elastic unloading from the committed state u on the whole mesh's pattern,
+  /// or nothing where it is the linear elastic stiffness K (small strain: both plastic models
+  /// unload elastically), for the exact unloading stiffness (unloading_stiffness.hpp).
+  virtual std::optional<std::vector<double>> unloading_tangent(const double* /*u*/) const { return std::nullopt; }
   /// The whole mesh's element slots (its free-equation system).
   virtual const std::vector<ElementSlot>& slots() const = 0;
 };

@@ -28,5 +28,12 @@ namespace indentsim {
 double elastic_unloading_stiffness(const ElasticStiffness& stiffness, const ContactDiscretization& contact,
                                    const double* u, const double* internal_force, double alpha,
                                    const ContactResult& state);
+/// The same for a bulk whose unloading operator is not K (finite strain: the tangent at the
+/// state, geometric terms included), given as `tangent` on K's pattern: J w = -dF/d(alpha) with
+/// the contact's own Jacobian rows, S = -f sum_k (T w)_k over the candidates' vertical rows.
+/// Contacts that carry history are refused (std::logic_error): friction is not built in finite strain.
+double unloading_stiffness_of_tangent(const StiffnessPattern& pattern, const std::vector<double>& tangent,
+                                      const ContactDiscretization& contact, const double* u,
+                                      const double* internal_force, double alpha);
 
 }  // namespace indentsim
