@@ -241,4 +241,22 @@ std::array<int, 8> Mesh::element_dofs(int ei, int ej) const {
           dof_v(n[0]), dof_v(n[1]), dof_v(n[2]), dof_v(n[3])};
 }
 
+std::vector<Rectangle> Mesh::class_rectangles() const {
+  // A graded tensor mesh has few distinct rectangles (in axisymmetry every column differs, the
+  // rows still repeat).
+  std::vector<Rectangle> columns(static_cast<std::size_t>(column_classes()));
+  std::vector<double> heights(static_cast<std::size_t>(height_classes()));
+  for (int ei = 0; ei < elements_x(); ++ei) columns[static_cast<std::size_t>(column_class(ei))] = rectangle(ei, 0);
+  for (int ej = 0; ej < elements_y(); ++ej) heights[static_cast<std::size_t>(height_class(ej))] = rectangle(0, ej).height;
+  std::vector<Rectangle> classes;
+  classes.reserve(columns.size() * heights.size());
+  for (const Rectangle& column : columns)
+    for (const double height : heights) {
+      Rectangle rect = column;
+      rect.height = height;
+      classes.push_back(rect);
+    }
+  return classes;
+}
+
 }  // namespace indentsim

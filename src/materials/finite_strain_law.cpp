@@ -10,8 +10,6 @@ HenckyPointLaw::HenckyPointLaw(const ElasticMaterial& elastic, std::unique_ptr<P
 FiniteStrainResponse HenckyPointLaw::respond(std::size_t point, const DeformationGradient& F) const {
   const LogarithmicStrain e = logarithmic_strain(F, identity_tensor());
   FiniteStrainResponse r;
-  r.logarithmic_strain = e.strain;
-  r.strain_intensity = strain_intensity(e.strain);
   ConstitutiveMatrix d = elastic_;
   if (law_) {
     const PointResponse small = law_->respond(point, e.strain);
@@ -59,9 +57,6 @@ FiniteStrainResponse J2LogStrainPointLaw::respond(const DeformationGradient& F, 
   const NominalResponse p = nominal_response(F, j.stress, j.tangent, trial.derivative);
   r.nominal = p.stress;
   r.tangent = p.tangent;
-  const LogarithmicStrain total = logarithmic_strain(F, identity_tensor());
-  r.logarithmic_strain = total.strain;
-  r.strain_intensity = strain_intensity(total.strain);
   if (updated) {
     // e_e = e_e^tr - d eps_p (tensor components 11, 22, 33, 12 of the return's plastic strain).
     const Eigen::Vector4d& dp = j.state.plastic_strain;

@@ -122,23 +122,13 @@ ElementVector gather(const Mesh& mesh, int ei, int ej, const double* u) {
 ElasticStiffness::ElasticStiffness(const Mesh& mesh, const ElasticMaterial& material,
                                    const StiffnessPattern& pattern)
     : mesh_(mesh), pattern_(pattern) {
-  // One representative rectangle per (column class, height class): a graded tensor mesh has few
-  // distinct rectangles (in axisymmetry every column differs, the rows still repeat).
-  std::vector<Rectangle> columns(mesh.column_classes());
-  std::vector<double> heights(mesh.height_classes());
-  for (int ei = 0; ei < mesh.elements_x(); ++ei) columns[mesh.column_class(ei)] = mesh.rectangle(ei, 0);
-  for (int ej = 0; ej < mesh.elements_y(); ++ej) heights[mesh.height_class(ej)] = mesh.rectangle(0, ej).height;
+  // One representative rectangle per (column class, height class).
   const LameConstants lame = material.lame();
   lame_ = lame;
-  by_class_.resize(static_cast<std::size_t>(mesh.column_classes()) * mesh.height_classes());
-  quadrature_by_class_.resize(by_class_.size());
-  for (int c = 0; c < mesh.column_classes(); ++c)
-    for (int h = 0; h < mesh.height_classes(); ++h) {
-      Rectangle rect = columns[c];
-      rect.height = heights[h];
-      by_class_[c * mesh.height_classes() + h] = mesh.kinematics().elastic_stiffness(rect, lame, mesh.element_kind());
-      quadrature_by_class_[c * mesh.height_classes() + h] = mesh.kinematics().quadrature(rect, mesh.element_kind());
-    }
+  for (const Rectangle& rect : mesh.class_rectangles()) {
+    by_class_.push_back(mesh.kinematics().elastic_stiffness(rect, lame, mesh.element_kind()));
+    quadrature_by_class_.push_back(mesh.kinematics().quadrature(rect, mesh.element_kind()));
+  }
 
   values_.assign(static_cast<std::size_t>(pattern.nonzeros()), 0.0);
   for (int ei = 0; ei < mesh.elements_x(); ++ei)

@@ -14,6 +14,14 @@ int contact_candidate_count(const Mesh& mesh, const PunchShape& punch) {
   return count;  // beyond the punch's rim: never touched
 }
 
+std::vector<int> tangential_row_indices(const std::vector<ContactCandidate>& candidates) {
+  std::vector<int> rows(candidates.size(), -1);
+  int next = static_cast<int>(candidates.size());
+  for (std::size_t k = 0; k < candidates.size(); ++k)
+    if (candidates[k].tangential_equation >= 0) rows[k] = next++;
+  return rows;
+}
+
 std::vector<ContactCandidate> contact_candidates(const Mesh& mesh, const PunchShape& punch,
                                                  const StiffnessPattern& pattern,
                                                  const std::vector<double>& stiffness_values) {

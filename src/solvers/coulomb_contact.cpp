@@ -14,16 +14,6 @@ namespace {
 // converges the rows to solver.tolerance, far below it).
 constexpr double slip_report_tolerance = 1e-6;
 
-// Per candidate, its tangential row's index in row_equations() (after the candidates' vertical
-// rows, in candidate order), or -1 where the unknown is fixed.
-std::vector<int> tangential_rows(const std::vector<ContactCandidate>& candidates) {
-  std::vector<int> rows(candidates.size(), -1);
-  int next = static_cast<int>(candidates.size());
-  for (std::size_t k = 0; k < candidates.size(); ++k)
-    if (candidates[k].tangential_equation >= 0) rows[k] = next++;
-  return rows;
-}
-
 // Alart and Curnier's augmented normal force max(0, c_k (v_k + alpha - g_k) - r_k): the punch's
 // force -r_k at every solution (where a contact node's penetration vanishes), and 0 exactly where
 // node-to-rigid's normal row opens (c_k pen_k = r_k), so the cone's radius, and with it F^t, is
@@ -47,7 +37,7 @@ CoulombNodeToRigidContact::CoulombNodeToRigidContact(std::shared_ptr<const Punch
       normal_(punch_shape(), symmetry_factor, this->candidates()),
       mu_(mu),
       committed_(std::move(committed)),
-      tangential_row_(tangential_rows(this->candidates())) {
+      tangential_row_(tangential_row_indices(this->candidates())) {
   if (!(mu_ > 0.0)) throw std::invalid_argument("Coulomb friction needs a coefficient > 0 (0 is node-to-rigid contact)");
   committed_.resize(this->candidates().size(), 0.0);
 }

@@ -11,14 +11,6 @@ namespace indentsim {
 
 namespace {
 
-std::vector<int> tangential_rows(const std::vector<ContactCandidate>& candidates) {
-  std::vector<int> rows(candidates.size(), -1);
-  int next = static_cast<int>(candidates.size());
-  for (std::size_t k = 0; k < candidates.size(); ++k)
-    if (candidates[k].tangential_equation >= 0) rows[k] = next++;
-  return rows;
-}
-
 /// g''(x) by central differences of g' (the profiles give g and g' in closed form or as cubics;
 /// the second derivative only enters the horizontal row's Jacobian).
 double curvature(const PunchShape& punch, double x, double scale) {
@@ -39,7 +31,7 @@ CurrentConfigurationContact::CurrentConfigurationContact(const Mesh& mesh, std::
 CurrentConfigurationContact::CurrentConfigurationContact(std::shared_ptr<const PunchShape> punch, double symmetry_factor,
                                                          std::vector<ContactCandidate> candidates)
     : ContactDiscretization(std::move(punch), symmetry_factor, std::move(candidates), true),
-      tangential_row_(tangential_rows(this->candidates())) {}
+      tangential_row_(tangential_row_indices(this->candidates())) {}
 
 std::unique_ptr<ContactDiscretization> CurrentConfigurationContact::on_candidates(
     std::vector<ContactCandidate> candidates) const {

@@ -13,18 +13,8 @@ FiniteStrainBulk::FiniteStrainBulk(const ElasticStiffness& elastic, std::unique_
       slots_(whole_mesh_slots(elastic.mesh(), elastic.pattern())),
       committed_u_(static_cast<std::size_t>(elastic.mesh().equations()), 0.0) {
   // One quadrature per (column class, height class), as ElasticStiffness tabulates its matrices.
-  std::vector<Rectangle> columns(mesh_.column_classes());
-  std::vector<double> heights(mesh_.height_classes());
-  for (int ei = 0; ei < mesh_.elements_x(); ++ei) columns[mesh_.column_class(ei)] = mesh_.rectangle(ei, 0);
-  for (int ej = 0; ej < mesh_.elements_y(); ++ej) heights[mesh_.height_class(ej)] = mesh_.rectangle(0, ej).height;
-  quadrature_by_class_.resize(static_cast<std::size_t>(mesh_.column_classes()) * mesh_.height_classes());
-  for (int c = 0; c < mesh_.column_classes(); ++c)
-    for (int h = 0; h < mesh_.height_classes(); ++h) {
-      Rectangle rect = columns[c];
-      rect.height = heights[h];
-      quadrature_by_class_[static_cast<std::size_t>(c) * mesh_.height_classes() + h] =
-          mesh_.kinematics().finite_strain_quadrature(rect, mesh_.element_kind());
-    }
+  for (const Rectangle& rect : mesh_.class_rectangles())
+    quadrature_by_class_.push_back(mesh_.kinematics().finite_strain_quadrature(rect, mesh_.element_kind()));
 }
 
 bool FiniteStrainBulk::symmetric_tangent() const { return mesh_.element_kind() != ElementKind::bbar; }
@@ -133,7 +123,9 @@ void FiniteStrainBulk::commit(const double* u) {
       const auto F = quadrature(ei, ej).law_gradients(gather(mesh_, ei, ej, u));
       const std::size_t first = 4 * static_cast<std::size_t>(mesh_.element(ei, ej));
       for (std::size_t g = 0; g < 4; ++g) {
-        max_strain_intensity_ = std::max(max_strain_intensity_, law_->respond(first + g, F[g]).strain_intensity);
+        // e_u of the logarithmic strain 1/2 ln(F F^T).
+        max_strain_intensity_ =
+            std::max(max_strain_intensity_, strain_intensity(logarithmic_strain(F[g], identity_tensor()).strain));
         law_->commit(first + g, F[g]);
         if (law_->has_yielded(first + g)) ++plastic_points_;
       }
@@ -147,7 +139,8 @@ std::array<GaussPointState, 4> FiniteStrainBulk::gauss_point_states(int ei, int 
   for (std::size_t g = 0; g < 4; ++g) {
     const FiniteStrainResponse r = law_->respond(first + g, F[g]);
     // Cauchy stress sigma = tau / J on the current configuration.
-    states[g] = {r.kirchhoff / jacobian(F[g]), r.strain_intensity, 0.0, law_->has_yielded(first + g)};
+    states[g] = {r.kirchhoff / jacobian(F[g]), strain_intensity(logarithmic_strain(F[g], identity_tensor()).strain), 0.0,
+                 law_->has_yielded(first + g)};
   }
   return states;
 }

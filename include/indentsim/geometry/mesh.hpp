@@ -100,6 +100,9 @@ public:
   /// and height classes agree.
   int column_class(int ei) const { return kinematics_->position_dependent() ? ei : width_class_[ei]; }
   int column_classes() const { return kinematics_->position_dependent() ? elements_x() : width_classes_; }
+  /// One rectangle per (column class, height class), at index c * height_classes() + h: what every
+  /// element of the pair shares (its matrices and quadratures are tabulated on it).
+  std::vector<Rectangle> class_rectangles() const;
 
   /// Classes of equal element widths / heights: elements of one class pair share a matrix.
   int width_class(int ei) const { return width_class_[ei]; }

@@ -25,8 +25,6 @@ struct FiniteStrainResponse {
   NominalStress nominal = NominalStress::Zero();      ///< first Piola-Kirchhoff stress P
   NominalTangent tangent = NominalTangent::Zero();    ///< dP/dF, consistent
   VoigtVector kirchhoff = VoigtVector::Zero();        ///< tau = J sigma (11, 22, 12, 33)
-  VoigtVector logarithmic_strain = VoigtVector::Zero();  ///< 1/2 ln(F F^T), engineering shear
-  double strain_intensity = 0.0;                      ///< e_u of the logarithmic strain
   bool plastic = false;                               ///< on a plastic branch now
 };
 

@@ -42,6 +42,11 @@ struct ContactCandidate {
 /// v + alpha - g: how far a candidate is past the punch's surface (minus the gap d) [m].
 inline double penetration(const ContactCandidate& c, double v, double alpha) { return v + alpha - c.surface_height; }
 
+/// Per candidate, the index of its horizontal row in row_equations() of a discretization built
+/// with tangential rows (after the candidates' vertical rows, in candidate order), or -1 where a
+/// symmetry condition fixes the unknown.
+std::vector<int> tangential_row_indices(const std::vector<ContactCandidate>& candidates);
+
 /// How many surface nodes, from the axis, the punch can touch: those inside its rim (node i is
 /// candidate i).
 int contact_candidate_count(const Mesh& mesh, const PunchShape& punch);
