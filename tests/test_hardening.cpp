@@ -75,19 +75,6 @@ J2Response uniaxial(const J2Law& law, double axial, J2State& state) {
   return r;
 }
 
-// Central differences of the stress, column by column.
-template <class StressOf>
-ConstitutiveMatrix finite_difference_tangent(const StressOf& stress, const VoigtVector& strain) {
-  ConstitutiveMatrix fd;
-  const double step = 1e-7 * strain.norm();
-  for (int j = 0; j < 4; ++j) {
-    VoigtVector plus = strain, minus = strain;
-    plus[j] += step;
-    minus[j] -= step;
-    fd.col(j) = (stress(plus) - stress(minus)) / (2 * step);
-  }
-  return fd;
-}
 
 }  // namespace
 
@@ -149,7 +136,7 @@ TEST(Hardening, ReturnMappingTangentMatchesFiniteDifferencesForEachLaw) {
           if (near_kink) continue;
         }
         const ConstitutiveMatrix fd =
-            finite_difference_tangent([&](const VoigtVector& e) { return law.respond(e, old).stress; }, strain);
+            indentsim::testing::finite_difference_tangent([&](const VoigtVector& e) { return law.respond(e, old).stress; }, strain);
         const double scale = r.tangent.cwiseAbs().maxCoeff();
         EXPECT_LE((r.tangent - fd).cwiseAbs().maxCoeff(), 1e-6 * scale)
             << "plastic " << r.plastic << "\n" << r.tangent << "\n" << fd;

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "indentsim/materials/material.hpp"
+#include "test_support.hpp"
 
 using namespace indentsim;
 
@@ -18,19 +19,6 @@ VoigtVector strain_with_intensity(VoigtVector direction, double e_u) {
   return direction * (e_u / strain_intensity(direction));
 }
 
-// Central differences of a stress function, column by column.
-template <class StressOf>
-ConstitutiveMatrix finite_difference_tangent(const StressOf& stress, const VoigtVector& strain) {
-  ConstitutiveMatrix fd;
-  const double step = 1e-7 * strain.norm();
-  for (int j = 0; j < 4; ++j) {
-    VoigtVector plus = strain, minus = strain;
-    plus[j] += step;
-    minus[j] -= step;
-    fd.col(j) = (stress(plus) - stress(minus)) / (2 * step);
-  }
-  return fd;
-}
 
 void expect_tangent_matches(const IlyushinLaw& law, double e0) {
   std::mt19937 rng(7);
@@ -43,7 +31,7 @@ void expect_tangent_matches(const IlyushinLaw& law, double e0) {
       const SecantResponse r = law.respond(strain);
       EXPECT_EQ(r.plastic, factor > 1.0);
       const ConstitutiveMatrix fd =
-          finite_difference_tangent([&](const VoigtVector& e) { return law.respond(e).stress; }, strain);
+          indentsim::testing::finite_difference_tangent([&](const VoigtVector& e) { return law.respond(e).stress; }, strain);
       const double scale = r.tangent.cwiseAbs().maxCoeff();
       EXPECT_LE((r.tangent - fd).cwiseAbs().maxCoeff(), 1e-6 * scale)
           << "e_u / e0 = " << factor << "\ntangent\n" << r.tangent << "\nfinite differences\n" << fd;
@@ -149,7 +137,7 @@ TEST(J2, ReturnMappingTangentMatchesFiniteDifferences) {
                                           size * curve.elastic_limit());
         const J2Response r = j2.respond(strain, old);
         const ConstitutiveMatrix fd =
-            finite_difference_tangent([&](const VoigtVector& e) { return j2.respond(e, old).stress; }, strain);
+            indentsim::testing::finite_difference_tangent([&](const VoigtVector& e) { return j2.respond(e, old).stress; }, strain);
         const double scale = r.tangent.cwiseAbs().maxCoeff();
         EXPECT_LE((r.tangent - fd).cwiseAbs().maxCoeff(), 1e-6 * scale)
             << "plastic " << r.plastic << "\n" << r.tangent << "\n" << fd;

@@ -16,8 +16,24 @@
 
 #include "indentsim/input/load_case.hpp"
 #include "indentsim/geometry/mesh.hpp"
+#include "indentsim/materials/material.hpp"
 
 namespace indentsim::testing {
+
+/// Central differences of a stress function of the strain, column by column: what a pointwise
+/// law's consistent tangent is checked against.
+template <class StressOf>
+ConstitutiveMatrix finite_difference_tangent(const StressOf& stress, const VoigtVector& strain) {
+  ConstitutiveMatrix fd;
+  const double step = 1e-7 * strain.norm();
+  for (int j = 0; j < 4; ++j) {
+    VoigtVector plus = strain, minus = strain;
+    plus[j] += step;
+    minus[j] -= step;
+    fd.col(j) = (stress(plus) - stress(minus)) / (2 * step);
+  }
+  return fd;
+}
 
 /// A small valid load case (the paper's block, elastic) for tests that edit one key.
 inline const std::string small_case_toml = R"(
