@@ -548,6 +548,8 @@ TEST(FiniteStrainRun, UnbuiltCombinationsAreRefusedNamingTheKey) {
 
 #include <csignal>
 
+#include <nlohmann/json.hpp>
+
 class FiniteStrainCli : public indentsim::testing::CliTest {};
 
 TEST_F(FiniteStrainCli, AFiniteStrainJ2RunKilledWhileLoadingAndUnloadingResumesToTheSameCurve) {
@@ -569,4 +571,15 @@ TEST_F(FiniteStrainCli, AFiniteStrainJ2RunKilledWhileLoadingAndUnloadingResumesT
   }
   EXPECT_NE(indentsim::testing::slurp(dir_ / "full" / "case.toml").find("strain = \"finite\""), std::string::npos);
   EXPECT_NE(indentsim::testing::slurp(dir_ / "full" / "summary.json").find("\"strain\": \"finite\""), std::string::npos);
+  // The condensed far field stayed within the gradient it may be linearized at (the near field
+  // grows before it is passed), and the killed runs carried its record through the checkpoint.
+  const auto far_field = [&](const std::filesystem::path& run) {
+    return nlohmann::json::parse(indentsim::testing::slurp(run / "summary.json"))["far_field"];
+  };
+  const auto full = far_field(dir_ / "full");
+  const double gradient = full["largest_displacement_gradient"].get<double>();
+  EXPECT_GT(gradient, 0.0);
+  EXPECT_LE(gradient, FiniteStrainBulk::small_strain_limit);
+  EXPECT_EQ(far_field(dir_ / "killed_4"), full);
+  EXPECT_EQ(far_field(dir_ / "killed_8"), full);
 }

@@ -151,18 +151,19 @@ ElementVector FiniteStrainBulk::element_force(int ei, int ej) const {
 }
 
 std::vector<double> FiniteStrainBulk::history() const {
-  std::vector<double> h{static_cast<double>(plastic_points_), max_strain_intensity_};
+  std::vector<double> h{static_cast<double>(plastic_points_), max_strain_intensity_, far_field_gradient_};
   const std::vector<double> law = law_->history();
   h.insert(h.end(), law.begin(), law.end());
   return h;
 }
 
 void FiniteStrainBulk::restore(const std::vector<double>& h, const double* u) {
-  if (h.size() < 2) throw std::invalid_argument("finite-strain history too short");
+  if (h.size() < 3) throw std::invalid_argument("finite-strain history too short");
   kept_.clear();
   plastic_points_ = static_cast<long>(h[0]);
   max_strain_intensity_ = h[1];
-  law_->restore(std::vector<double>(h.begin() + 2, h.end()));
+  far_field_gradient_ = h[2];
+  law_->restore(std::vector<double>(h.begin() + 3, h.end()));
   std::copy(u, u + committed_u_.size(), committed_u_.begin());
 }
 

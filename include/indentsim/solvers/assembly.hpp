@@ -108,6 +108,10 @@ public:
   /// one its law can carry at the committed strain, and the statistics what the points give.
   /// restore() itself trusts its input (a run also restores its own last reported state).
   virtual std::optional<std::string> history_violation() const { return std::nullopt; }
+  /// The largest displacement-gradient component |du_i/dX_j| (and u_r/R) reached so far in the
+  /// elements a condensed far field models in small strain, where the bulk's own kinematics are
+  /// finite (what that linearization neglects); nothing where the bulk is small-strain throughout.
+  virtual std::optional<double> far_field_gradient() const { return std::nullopt; }
 };
 
 /// Linear elasticity on the mesh: one element matrix per class of equal rectangles (the paper's

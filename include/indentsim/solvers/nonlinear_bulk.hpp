@@ -47,6 +47,10 @@ public:
   virtual std::optional<std::vector<double>> unloading_tangent(const double* /*u*/) const { return std::nullopt; }
   /// The whole mesh's element slots (its free-equation system).
   virtual const std::vector<ElementSlot>& slots() const = 0;
+  /// After commit(u): the elements outside `near` (the Newton system's) are the condensed far
+  /// field's, linear elastic in small strain; a bulk whose kinematics are not small strain
+  /// measures what that neglects there (far_field_gradient).
+  virtual void measure_far_field(const std::vector<ElementSlot>& /*near*/) {}
 };
 
 }  // namespace indentsim
