@@ -555,6 +555,44 @@ TEST(FiniteStrainRun, KicksLawStillHoldsUnderTheConeInFiniteStrain) {
   EXPECT_LT(worst, 5e-3) << "P/h^2 = " << mean;
 }
 
+TEST(FiniteStrainRun, AutoWeighsAnUpperEstimateOfWhatFiniteStrainChanges) {
+  // "auto" takes finite strain where its share of P, estimated as a multiple of alpha / a, exceeds
+  // the accuracy the run aims at.  The estimate must bound the change it stands for, without
+  // overstating it tenfold: an elastic sphere (the largest share per alpha / a measured) and
+  // J2 under a sphere, each run in both kinematics.
+  for (const auto& [name, overrides] :
+       {std::pair<const char*, std::vector<std::string>>{"axisymmetric/elastic_sphere.toml",
+                                                         {"load.path=[0, 1e-6]", "load.increments=4"}},
+        std::pair<const char*, std::vector<std::string>>{"axisymmetric/steel_sphere.toml", {"load.path=[0, 5e-6]", "load.increments=10"}}}) {
+    SCOPED_TRACE(name);
+    auto common = overrides;
+    common.insert(common.end(), {"mesh.error_estimate=\"off\"", "mesh.contact_nodes=12"});
+    auto finite = common;
+    finite.push_back("geometry.strain=\"finite\"");
+    const LoadCase small_case = indentsim::testing::shipped_case(name, common);
+    const double change =
+        std::abs(peak_force(indentsim::testing::shipped_case(name, finite)) / peak_force(small_case) - 1.0);
+    const double share = finite_strain_share(small_case, plan_run(small_case).mesh.contact_half_width_estimate);
+    RecordProperty(std::string("change_over_share_") + (name[13] == 'e' ? "elastic" : "j2"), fmt::format("{:.3f}", change / share));
+    EXPECT_LE(change, share);
+    EXPECT_GT(change, 0.1 * share);
+  }
+  // The choices, and why: finite under the cone, small for a shallow sphere, small with friction,
+  // small when the run asks for less accuracy than the share.
+  const auto choice = [](const char* name, std::vector<std::string> overrides) {
+    overrides.push_back("geometry.strain=\"auto\"");
+    const LoadCase lc = indentsim::testing::shipped_case(name, overrides);
+    return choose_strain(lc, plan_run(lc).mesh.contact_half_width_estimate);
+  };
+  EXPECT_EQ(choice("axisymmetric/berkovich_cone.toml", {}).first, StrainChoice::finite);
+  EXPECT_EQ(choice("axisymmetric/elastic_sphere.toml", {"load.path=[0, 1e-8]"}).first, StrainChoice::small);
+  const auto friction = choice("axisymmetric/steel_sphere.toml", {"contact.friction=0.1"});
+  EXPECT_EQ(friction.first, StrainChoice::small);
+  EXPECT_NE(friction.second.find("friction"), std::string::npos) << friction.second;
+  EXPECT_EQ(choice("axisymmetric/steel_sphere.toml", {"mesh.target_error=0.05"}).first, StrainChoice::small);
+  EXPECT_EQ(choice("axisymmetric/steel_sphere.toml", {}).first, StrainChoice::finite);
+}
+
 TEST(FiniteStrainRun, UnbuiltCombinationsAreRefusedNamingTheKey) {
   const auto refused = [](std::vector<std::string> overrides, const std::string& key) {
     overrides.push_back("geometry.strain=\"finite\"");

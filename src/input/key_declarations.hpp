@@ -29,7 +29,8 @@ struct Choice {
 };
 inline constexpr Choice<MaterialModel> model_names[] = {
     {"elastic", MaterialModel::elastic}, {"ilyushin", MaterialModel::ilyushin}, {"j2", MaterialModel::j2}};
-inline constexpr Choice<StrainChoice> strain_names[] = {{"small", StrainChoice::small}, {"finite", StrainChoice::finite}};
+inline constexpr Choice<StrainChoice> strain_names[] = {
+    {"small", StrainChoice::small}, {"finite", StrainChoice::finite}, {"auto", StrainChoice::automatic}};
 inline constexpr Choice<HardeningLaw> hardening_names[] = {
     {"linear", HardeningLaw::linear}, {"power", HardeningLaw::power},   {"power_law", HardeningLaw::power_law},
     {"ludwik", HardeningLaw::ludwik}, {"swift", HardeningLaw::swift},   {"voce", HardeningLaw::voce},

@@ -1,6 +1,7 @@
 #include "indentsim/simulation/run_configuration.hpp"
 
 #include <algorithm>
+#include <tuple>
 #include <cmath>
 
 #include <fmt/format.h>
@@ -198,9 +199,46 @@ NearField near_field_needed(const LoadCase& lc, const Mesh& mesh, const MeshPlan
   return choose_near_field(lc, mesh, plan, true, zone.at(std::min(depth, lc.max_depth())));
 }
 
+// How much finite strain moves P, per unit of the mean strain alpha / a under the punch
+// (docs/MODEL.md §12.5): measured 0.20 on elastic spheres (alpha / R from 1e-4 to 1e-2), 0.155 on
+// the elastic Berkovich cone, 0.084 under a flat punch; 0.052 and 0.049 on J2 under a sphere and
+// the cone.  The largest of each kind, rounded up, so that "auto" errs toward finite strain.
+constexpr double elastic_geometric_share = 0.25;
+constexpr double plastic_geometric_share = 0.06;
+// The accuracy a run aims at without mesh.target_error: the default mesh's discretization error
+// (docs/verification.md: the shipped plastic cases within 0.2% of their converged force).
+constexpr double default_accuracy = 2e-3;
+
+double finite_strain_share(const LoadCase& lc, double contact_half_width) {
+  const bool elastic = lc.material.model == MaterialModel::elastic;
+  return (elastic ? elastic_geometric_share : plastic_geometric_share) * lc.max_depth() / contact_half_width;
+}
+
+std::pair<StrainChoice, std::string> choose_strain(const LoadCase& lc, double contact_half_width) {
+  if (lc.geometry.strain != StrainChoice::automatic) return {lc.geometry.strain, ""};
+  if (lc.contact.friction > 0.0)
+    return {StrainChoice::small, "auto: small, as finite strain is not built with friction (contact.friction > 0)"};
+  if (lc.contact.discretization != ContactDiscretizationChoice::node_to_rigid)
+    return {StrainChoice::small, "auto: small, as finite strain is not built with the integrated gap"};
+  if (lc.solver.linear == LinearSolverChoice::cholmod)
+    return {StrainChoice::small, "auto: small, as solver.linear = \"cholmod\" cannot factor finite strain's rows"};
+  const bool elastic = lc.material.model == MaterialModel::elastic;
+  const double mean_strain = lc.max_depth() / contact_half_width;
+  const double share = finite_strain_share(lc, contact_half_width);
+  const double accuracy = lc.mesh.target_error.value_or(default_accuracy);
+  const bool finite = share > accuracy;
+  return {finite ? StrainChoice::finite : StrainChoice::small,
+          fmt::format("auto: {}, as finite strain's share of P, about {:g} alpha / a = {:.2g} at alpha / a = {:.3g}, is "
+                      "{} {} = {:g}",
+                      finite ? "finite" : "small", elastic ? elastic_geometric_share : plastic_geometric_share, share,
+                      mean_strain, finite ? "above" : "within", lc.mesh.target_error ? "mesh.target_error" : "the default mesh's accuracy", accuracy)};
+}
+
 RunConfiguration resolve_choices(const LoadCase& lc, const RunPlan& plan, const std::optional<NearField>& near_field) {
   RunConfiguration c;
   c.plan = plan;
+  std::tie(c.strain, c.strain_reason) = choose_strain(lc, plan.mesh.contact_half_width_estimate);
+  const bool finite_strain = c.strain == StrainChoice::finite;
   c.element = choose_element(lc);
   const bool plastic = lc.material.model != MaterialModel::elastic;
   // Plastic Newton iterations contract linearly (each moves the yield front across Gauss points
@@ -215,7 +253,7 @@ RunConfiguration resolve_choices(const LoadCase& lc, const RunPlan& plan, const 
   } else if (plan.plastic_zone.empty()) {
     // Finite strain integrates the near elements nonlinearly even when elastic: they are planned
     // as a plastic zone's would be (2.5 a), so that the run does not grow them increment by increment.
-    c.near_field = choose_near_field(lc, mesh, plan.mesh, plastic || lc.geometry.strain == StrainChoice::finite,
+    c.near_field = choose_near_field(lc, mesh, plan.mesh, plastic || finite_strain,
                                      std::nullopt);
   } else {
     // Whether to condense is decided on the zone of the deepest point; the near field starts as
@@ -233,7 +271,7 @@ RunConfiguration resolve_choices(const LoadCase& lc, const RunPlan& plan, const 
   for (int i = 0; i < candidates; ++i) {
     candidate_equations.push_back(mesh.equation(Mesh::dof_v(mesh.node(i, mesh.top_row()))));
     // Friction and the contact on the current surface write rows on the horizontal unknowns too.
-    if (lc.contact.friction > 0.0 || lc.geometry.strain == StrainChoice::finite)
+    if (lc.contact.friction > 0.0 || finite_strain)
       tangential_equations.push_back(mesh.equation(Mesh::dof_u(mesh.node(i, mesh.top_row()))));
   }
   const auto unknowns_of = [&](const NearField& near) -> std::int64_t {
@@ -257,7 +295,7 @@ RunConfiguration resolve_choices(const LoadCase& lc, const RunPlan& plan, const 
   // Sliding friction's rows are unsymmetric (docs/MODEL.md §3.3): only KLU factors them.
   if (lc.contact.friction > 0.0 && std::isfinite(lc.contact.friction)) c.linear_solver = LinearSolverKind::klu;
   // So are the rows of finite strain's contact and F-bar's tangent (docs/MODEL.md §12).
-  if (lc.geometry.strain == StrainChoice::finite) c.linear_solver = LinearSolverKind::klu;
+  if (finite_strain) c.linear_solver = LinearSolverKind::klu;
   c.companion_contact_nodes = companion_contact_nodes(lc);
   return c;
 }
@@ -275,6 +313,7 @@ LoadCase case_as_run(const LoadCase& lc, const RunConfiguration& c) {
     mesh.plastic_zone.push_back(
         {c.plan.plastic_zone.depths[k], c.plan.plastic_zone.extents[k].width, c.plan.plastic_zone.extents[k].depth});
   as_run.solver.jacobian = c.jacobian;
+  as_run.geometry.strain = c.strain;
   // solver.linear and solver.far_field stay as given: their "auto" is chosen on each mesh (the
   // error estimate's companions are smaller), and summary.json's configuration says what it chose.
   return as_run;
@@ -298,6 +337,7 @@ std::vector<std::pair<std::string, std::string>> describe(const RunConfiguration
       {"mesh", fmt::format("{} x {} nodes, {} unknowns", p.nodes_x, p.nodes_y, c.unknowns)},
       {"contact_half_width", fmt::format("{:.6g} m{}", p.contact_half_width_estimate,
                                          c.plan.plastic_zone.empty() ? "" : " (from the pilot run)")},
+      {"strain", c.strain_reason.empty() ? to_string(c.strain) : c.strain_reason},
       {"element", c.element == ElementKind::bbar ? "bbar" : "q1"},
       {"far_field", c.near_field.condensed
                         ? fmt::format("condensed: near field of {} contact nodes, {} x {} elements, {} unknowns",

@@ -80,7 +80,7 @@ void Simulation::build(const RunConfiguration& configuration, const std::optiona
   stiffness_ = std::make_unique<ElasticStiffness>(*mesh_, material, *pattern_);
   bulk_ = stiffness_.get();
   const std::size_t points = 4 * static_cast<std::size_t>(mesh_->elements());
-  if (load_case_.geometry.strain == StrainChoice::finite) {
+  if (config_.strain == StrainChoice::finite) {
     // docs/MODEL.md §12: the laws of the logarithmic strain, the bulk in finite strain, the
     // contact on the current surface -- every run, elastic ones too.
     std::unique_ptr<FiniteStrainPointLaw> finite_law;
@@ -101,7 +101,7 @@ void Simulation::build(const RunConfiguration& configuration, const std::optiona
     plastic_ = std::make_unique<InelasticBulk>(*stiffness_, std::move(point_law));
     bulk_ = plastic_.get();
   }
-  if (load_case_.geometry.strain == StrainChoice::finite)
+  if (config_.strain == StrainChoice::finite)
     contact_ = std::make_unique<CurrentConfigurationContact>(*mesh_, make_punch(load_case_.punch), *pattern_,
                                                              stiffness_->values());
   else if (load_case_.contact.discretization == ContactDiscretizationChoice::integrated_gap)

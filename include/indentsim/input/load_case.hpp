@@ -15,9 +15,10 @@ namespace indentsim {
 /// The scene: plane strain (a long cylinder or wedge on a block, per unit thickness) or
 /// axisymmetry (a body of revolution on a cylindrical specimen).
 enum class SceneKind { plane_strain, axisymmetric };
-/// The kinematics of the specimen: small strain (the paper's), or finite strain with contact on
-/// the current configuration (docs/MODEL.md §12).
-enum class StrainChoice { small, finite };
+/// The kinematics of the specimen: small strain (the paper's), finite strain with contact on the
+/// current configuration (docs/MODEL.md §12), or the one the scene needs (automatic: chosen with
+/// the run's other "auto"s, choose_strain in run_configuration.hpp, §12.5).
+enum class StrainChoice { small, finite, automatic };
 
 struct GeometryInput {
   SceneKind kind = SceneKind::plane_strain;

@@ -34,6 +34,8 @@ struct RunConfiguration {
   std::int64_t unknowns = 0;           ///< of the whole mesh
   std::int64_t system_unknowns = 0;    ///< of the first Newton system (the near field, if condensed)
   std::vector<int> companion_contact_nodes;  ///< the error estimate's companion runs (none: empty)
+  StrainChoice strain = StrainChoice::small;  ///< small or finite: never automatic
+  std::string strain_reason;                  ///< why, for geometry.strain = "auto" (else empty)
 };
 
 /// Every "auto" of `load_case` made concrete on `plan` (no pilot run: plan_run made the plan).
@@ -52,6 +54,14 @@ std::vector<std::pair<std::string, std::string>> describe(const RunConfiguration
 /// The element a load case gets: mesh.element, or for "auto" B-bar where Q1 would lock (nu >=
 /// 0.45, nearly perfect plasticity, a plastic material under a cone), the paper's Q1 elsewhere.
 ElementKind choose_element(const LoadCase& load_case);
+
+/// The kinematics a load case gets: geometry.strain, or for "auto" finite strain where its
+/// geometric share of P is estimated above the accuracy the run aims at, with the reason
+/// (docs/MODEL.md §12.5).  `contact_half_width` is the plan's estimate at the deepest point.
+std::pair<StrainChoice, std::string> choose_strain(const LoadCase& load_case, double contact_half_width);
+/// The estimated relative change of P from small to finite strain that choose_strain weighs: a
+/// measured multiple of the mean strain alpha_max / a under the punch, an upper estimate.
+double finite_strain_share(const LoadCase& load_case, double contact_half_width);
 
 /// The near field to solve for at depth `depth` while the pilot's plastic zone grows (`zone`):
 /// condensed, holding the zone at twice the depth (within the load path) with its margins.
