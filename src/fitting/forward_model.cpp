@@ -10,6 +10,7 @@
 #include "indentsim/base/error.hpp"
 #include "indentsim/base/file_system.hpp"
 #include "indentsim/simulation/load_stepping.hpp"
+#include "indentsim/simulation/run_configuration.hpp"
 #include "indentsim/simulation/simulation.hpp"
 
 namespace indentsim {
@@ -177,6 +178,9 @@ ForwardModel::ForwardModel(FitData data, std::vector<MaterialParameter> paramete
   const LoadCase& user = data_.load_case;
   const std::string& file = data_.file;
   prepared_ = user;
+  // One kinematics for every forward run: "auto" chosen once on the user's case, so that a step
+  // of the parameters or a replanned mesh never switches it (the cost stays smooth).
+  pin_kinematics(prepared_);
   if (data_.abscissa.empty() || data_.abscissa.size() != data_.values.size())
     throw InputError(file, "data", "holds no points");
 

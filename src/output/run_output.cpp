@@ -242,6 +242,7 @@ void RunOutput::set_configuration(const RunConfiguration& configuration) {
   nlohmann::ordered_json j = nlohmann::ordered_json::object();
   for (const auto& [name, value] : describe(configuration)) j[name] = value;
   run_fields_["configuration"] = std::move(j);
+  run_fields_["scene"]["strain"] = to_string(configuration.strain);  // "auto" made concrete
   // The folder says it from its first write on: a run killed before it finishes keeps it.
   write_file_atomically(dir_ / "summary.json", summary_.json(run_fields_, RunStatus::running, ""));
 }

@@ -246,6 +246,7 @@ LoadCase plan_case_for_target(const LoadCase& load_case, TargetErrorChoice& choi
   choice.target = *load_case.mesh.target_error;
   const double order = force_order_assumed(load_case);
   LoadCase pilot_case = load_case;
+  pin_kinematics(pilot_case);  // chosen against the target, which the planned case no longer holds
   pilot_case.mesh.contact_nodes = first_pilot_contact_nodes;
   int increments_factor = 1;
   for (;;) {

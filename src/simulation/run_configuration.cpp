@@ -178,7 +178,9 @@ RunPlan plan_run(const LoadCase& load_case, std::optional<double> planned_contac
       plan.plastic_zone.extents.push_back(PlasticExtent{z[1], z[2]});
     }
   } else if (load_case.material.model != MaterialModel::elastic && !load_case.mesh.contact_half_width) {
-    const PilotResult pilot = pilot_run(load_case);
+    LoadCase pinned = load_case;  // the pilot drops mesh.target_error: it runs the kinematics chosen with it
+    pin_kinematics(pinned);
+    const PilotResult pilot = pilot_run(pinned);
     plan.mesh = plan_mesh(load_case, pilot.contact_half_width);
     plan.plastic_zone = pilot.plastic_zone;
   }
@@ -209,13 +211,19 @@ constexpr double plastic_geometric_share = 0.06;
 // (docs/verification.md: the shipped plastic cases within 0.2% of their converged force).
 constexpr double default_accuracy = 2e-3;
 
-double finite_strain_share(const LoadCase& lc, double contact_half_width) {
-  const bool elastic = lc.material.model == MaterialModel::elastic;
-  return (elastic ? elastic_geometric_share : plastic_geometric_share) * lc.max_depth() / contact_half_width;
+// The punch's own estimate of the contact radius at the deepest point (Sneddon's, the mesh
+// plan's first guess), which the case alone decides.
+double planned_contact_radius(const LoadCase& lc) {
+  return make_punch(lc.punch)->contact_estimate(lc.geometry.kind, lc.max_depth(), lc.geometry.ly, lc.material.nu);
 }
 
-std::pair<StrainChoice, std::string> choose_strain(const LoadCase& lc, double contact_half_width) {
-  if (lc.geometry.strain != StrainChoice::automatic) return {lc.geometry.strain, ""};
+double finite_strain_share(const LoadCase& lc) {
+  const bool elastic = lc.material.model == MaterialModel::elastic;
+  return (elastic ? elastic_geometric_share : plastic_geometric_share) * lc.max_depth() / planned_contact_radius(lc);
+}
+
+std::pair<StrainChoice, std::string> choose_strain(const LoadCase& lc) {
+  if (lc.geometry.strain != StrainChoice::automatic) return {lc.geometry.strain, lc.geometry.strain_reason};
   if (lc.contact.friction > 0.0)
     return {StrainChoice::small, "auto: small, as finite strain is not built with friction (contact.friction > 0)"};
   if (lc.contact.discretization != ContactDiscretizationChoice::node_to_rigid)
@@ -223,21 +231,27 @@ std::pair<StrainChoice, std::string> choose_strain(const LoadCase& lc, double co
   if (lc.solver.linear == LinearSolverChoice::cholmod)
     return {StrainChoice::small, "auto: small, as solver.linear = \"cholmod\" cannot factor finite strain's rows"};
   const bool elastic = lc.material.model == MaterialModel::elastic;
-  const double mean_strain = lc.max_depth() / contact_half_width;
-  const double share = finite_strain_share(lc, contact_half_width);
+  const double mean_strain = lc.max_depth() / planned_contact_radius(lc);
+  const double share = finite_strain_share(lc);
   const double accuracy = lc.mesh.target_error.value_or(default_accuracy);
   const bool finite = share > accuracy;
   return {finite ? StrainChoice::finite : StrainChoice::small,
           fmt::format("auto: {}, as finite strain's share of P, about {:g} alpha / a = {:.2g} at alpha / a = {:.3g}, is "
                       "{} {} = {:g}",
                       finite ? "finite" : "small", elastic ? elastic_geometric_share : plastic_geometric_share, share,
-                      mean_strain, finite ? "above" : "within", lc.mesh.target_error ? "mesh.target_error" : "the default mesh's accuracy", accuracy)};
+                      mean_strain, finite ? "above" : "within",
+                      lc.mesh.target_error ? "mesh.target_error" : "the default mesh's accuracy", accuracy)};
+}
+
+void pin_kinematics(LoadCase& lc) {
+  if (lc.geometry.strain != StrainChoice::automatic) return;
+  std::tie(lc.geometry.strain, lc.geometry.strain_reason) = choose_strain(lc);
 }
 
 RunConfiguration resolve_choices(const LoadCase& lc, const RunPlan& plan, const std::optional<NearField>& near_field) {
   RunConfiguration c;
   c.plan = plan;
-  std::tie(c.strain, c.strain_reason) = choose_strain(lc, plan.mesh.contact_half_width_estimate);
+  std::tie(c.strain, c.strain_reason) = choose_strain(lc);
   const bool finite_strain = c.strain == StrainChoice::finite;
   c.element = choose_element(lc);
   const bool plastic = lc.material.model != MaterialModel::elastic;
@@ -313,9 +327,9 @@ LoadCase case_as_run(const LoadCase& lc, const RunConfiguration& c) {
     mesh.plastic_zone.push_back(
         {c.plan.plastic_zone.depths[k], c.plan.plastic_zone.extents[k].width, c.plan.plastic_zone.extents[k].depth});
   as_run.solver.jacobian = c.jacobian;
-  as_run.geometry.strain = c.strain;
   // solver.linear and solver.far_field stay as given: their "auto" is chosen on each mesh (the
   // error estimate's companions are smaller), and summary.json's configuration says what it chose.
+  // So does geometry.strain: its "auto" depends on the case alone (choose_strain).
   return as_run;
 }
 

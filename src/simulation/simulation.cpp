@@ -256,7 +256,7 @@ void Simulation::commit(double trial) {
   state_.deepest = std::max(state_.deepest, state_.alpha);
   largest_condition_ = std::max(largest_condition_, last_report_.condition_estimate);
   bulk_->commit(state_.u.data());
-  if (plastic_) plastic_->measure_far_field(condensation_ ? condensation_->elements() : plastic_->slots());
+  if (plastic_ && condensation_) plastic_->measure_far_field(condensation_->elements());
 }
 
 void Simulation::predict(double trial, long& iterations, long& factorizations) {

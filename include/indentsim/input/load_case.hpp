@@ -23,6 +23,9 @@ enum class StrainChoice { small, finite, automatic };
 struct GeometryInput {
   SceneKind kind = SceneKind::plane_strain;
   StrainChoice strain = StrainChoice::small;
+  /// Not a key: why "auto" chose `strain`, when the choice was made before the run's own
+  /// planning (pin_kinematics: a case planned for mesh.target_error, a fit's forward model).
+  std::string strain_reason;
   double lx = 15e-3;  ///< block width of the half model, or the specimen's radius [m]
   double ly = 10e-3;  ///< block depth, or the specimen's height [m]
 };

@@ -23,8 +23,9 @@ namespace indentsim {
 // strain components (eps33, the hoop strain of axisymmetry).  No older format is read.
 // 4: the pilot's plastic zone growth; 5: the true contacts of the peaks passed, and the case as run
 // (the pilot's measurements as keys); 6: the force scales the state's two displacements converged
-// on (resume checks the state's equilibrium against them).
-constexpr std::uint32_t checkpoint_format_version = 6;
+// on (resume checks the state's equilibrium against them); 7: finite strain's history holds the
+// largest far-field gradient.
+constexpr std::uint32_t checkpoint_format_version = 7;
 
 struct Checkpoint {
   std::string load_case_toml;            ///< to_toml() of the load case as run

@@ -57,11 +57,15 @@ ElementKind choose_element(const LoadCase& load_case);
 
 /// The kinematics a load case gets: geometry.strain, or for "auto" finite strain where its
 /// geometric share of P is estimated above the accuracy the run aims at, with the reason
-/// (docs/MODEL.md §12.5).  `contact_half_width` is the plan's estimate at the deepest point.
-std::pair<StrainChoice, std::string> choose_strain(const LoadCase& load_case, double contact_half_width);
+/// (docs/MODEL.md §12.5).  It depends on the case alone (the punch's own contact estimate at the
+/// deepest point, not the mesh plan), so a resumed run or a companion chooses the same.
+std::pair<StrainChoice, std::string> choose_strain(const LoadCase& load_case);
 /// The estimated relative change of P from small to finite strain that choose_strain weighs: a
 /// measured multiple of the mean strain alpha_max / a under the punch, an upper estimate.
-double finite_strain_share(const LoadCase& load_case, double contact_half_width);
+double finite_strain_share(const LoadCase& load_case);
+/// Makes "auto" concrete in the case itself, with its reason, for what changes the case before
+/// it runs (planning for mesh.target_error drops the target; a fit moves the parameters).
+void pin_kinematics(LoadCase& load_case);
 
 /// The near field to solve for at depth `depth` while the pilot's plastic zone grows (`zone`):
 /// condensed, holding the zone at twice the depth (within the load path) with its margins.

@@ -57,7 +57,10 @@ public:
   void measure_far_field(const std::vector<ElementSlot>& near) override {
     far_field_gradient_ = std::max(far_field_gradient_, largest_gradient_outside(near));
   }
-  std::optional<double> far_field_gradient() const override { return far_field_gradient_; }
+  /// Nothing when no far field was condensed at any commit (a run on the whole mesh).
+  std::optional<double> far_field_gradient() const override {
+    return far_field_gradient_ >= 0.0 ? std::optional<double>(far_field_gradient_) : std::nullopt;
+  }
 
 private:
   struct KeptResponse {
@@ -81,7 +84,7 @@ private:
   std::vector<double> committed_u_;
   long plastic_points_ = 0;
   double max_strain_intensity_ = 0.0;
-  double far_field_gradient_ = 0.0;  ///< the largest of largest_gradient_outside at the commits
+  double far_field_gradient_ = -1.0;  ///< the largest of largest_gradient_outside at the commits (-1: none)
 };
 
 }  // namespace indentsim
