@@ -165,8 +165,9 @@ const std::vector<KeyDeclaration>& key_declarations() {
                             "(total Lagrangian, Hencky strain, J2 in the multiplicative split, F-bar for bbar, the gap "
                             "at the surface's current position; KLU; node_to_rigid contact without friction); auto "
                             "(finite where its geometric share of P, about 0.25 alpha / a elastic and 0.06 alpha / a "
-                            "plastic at the planned contact half-width a, exceeds mesh.target_error or 2e-3; small "
-                            "where finite strain is not built: friction, the integrated gap, cholmod)"},
+                            "plastic with a the punch's own (Sneddon) contact estimate at the deepest point, exceeds "
+                            "mesh.target_error or 2e-3; small where finite strain is not built: friction, the "
+                            "integrated gap, cholmod)"},
                            strain_names, [](auto& c) -> auto& { return c.geometry.strain; }));
     {
       const auto lx = [](auto& c) -> auto& { return c.geometry.lx; };

@@ -211,16 +211,19 @@ constexpr double plastic_geometric_share = 0.06;
 // (docs/verification.md: the shipped plastic cases within 0.2% of their converged force).
 constexpr double default_accuracy = 2e-3;
 
-// The punch's own estimate of the contact radius at the deepest point (Sneddon's, the mesh
-// plan's first guess), which the case alone decides.
-double planned_contact_radius(const LoadCase& lc) {
-  return make_punch(lc.punch)->contact_estimate(lc.geometry.kind, lc.max_depth(), lc.geometry.ly, lc.material.nu);
+// The mean strain alpha / a under the punch at the deepest point, with a the punch's own estimate
+// of the contact radius (Sneddon's, the mesh plan's first guess), which the case alone decides.
+double mean_strain_at_max_depth(const LoadCase& lc) {
+  const double a =
+      make_punch(lc.punch)->contact_estimate(lc.geometry.kind, lc.max_depth(), lc.geometry.ly, lc.material.nu);
+  return lc.max_depth() / a;
 }
 
-double finite_strain_share(const LoadCase& lc) {
-  const bool elastic = lc.material.model == MaterialModel::elastic;
-  return (elastic ? elastic_geometric_share : plastic_geometric_share) * lc.max_depth() / planned_contact_radius(lc);
+double geometric_share_per_strain(const LoadCase& lc) {
+  return lc.material.model == MaterialModel::elastic ? elastic_geometric_share : plastic_geometric_share;
 }
+
+double finite_strain_share(const LoadCase& lc) { return geometric_share_per_strain(lc) * mean_strain_at_max_depth(lc); }
 
 std::pair<StrainChoice, std::string> choose_strain(const LoadCase& lc) {
   if (lc.geometry.strain != StrainChoice::automatic) return {lc.geometry.strain, lc.geometry.strain_reason};
@@ -230,15 +233,15 @@ std::pair<StrainChoice, std::string> choose_strain(const LoadCase& lc) {
     return {StrainChoice::small, "auto: small, as finite strain is not built with the integrated gap"};
   if (lc.solver.linear == LinearSolverChoice::cholmod)
     return {StrainChoice::small, "auto: small, as solver.linear = \"cholmod\" cannot factor finite strain's rows"};
-  const bool elastic = lc.material.model == MaterialModel::elastic;
-  const double mean_strain = lc.max_depth() / planned_contact_radius(lc);
-  const double share = finite_strain_share(lc);
+  const double per_strain = geometric_share_per_strain(lc);
+  const double mean_strain = mean_strain_at_max_depth(lc);
+  const double share = per_strain * mean_strain;
   const double accuracy = lc.mesh.target_error.value_or(default_accuracy);
   const bool finite = share > accuracy;
   return {finite ? StrainChoice::finite : StrainChoice::small,
           fmt::format("auto: {}, as finite strain's share of P, about {:g} alpha / a = {:.2g} at alpha / a = {:.3g}, is "
                       "{} {} = {:g}",
-                      finite ? "finite" : "small", elastic ? elastic_geometric_share : plastic_geometric_share, share,
+                      finite ? "finite" : "small", per_strain, share,
                       mean_strain, finite ? "above" : "within",
                       lc.mesh.target_error ? "mesh.target_error" : "the default mesh's accuracy", accuracy)};
 }

@@ -110,8 +110,13 @@ public:
   virtual std::optional<std::string> history_violation() const { return std::nullopt; }
   /// The largest displacement-gradient component |du_i/dX_j| (and u_r/R) reached so far in the
   /// elements a condensed far field models in small strain, where the bulk's own kinematics are
-  /// finite (what that linearization neglects); nothing where the bulk is small-strain throughout.
-  virtual std::optional<double> far_field_gradient() const { return std::nullopt; }
+  /// finite (what that linearization neglects), beside the limit the near field grows at; nothing
+  /// where the bulk is small-strain throughout.
+  struct FarFieldCheck {
+    double largest_gradient;
+    double limit;
+  };
+  virtual std::optional<FarFieldCheck> far_field_check() const { return std::nullopt; }
 };
 
 /// Linear elasticity on the mesh: one element matrix per class of equal rectangles (the paper's

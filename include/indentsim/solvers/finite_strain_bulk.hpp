@@ -58,8 +58,9 @@ public:
     far_field_gradient_ = std::max(far_field_gradient_, largest_gradient_outside(near));
   }
   /// Nothing when no far field was condensed at any commit (a run on the whole mesh).
-  std::optional<double> far_field_gradient() const override {
-    return far_field_gradient_ >= 0.0 ? std::optional<double>(far_field_gradient_) : std::nullopt;
+  std::optional<FarFieldCheck> far_field_check() const override {
+    if (far_field_gradient_ < 0.0) return std::nullopt;
+    return FarFieldCheck{far_field_gradient_, small_strain_limit};
   }
 
 private:
