@@ -257,7 +257,7 @@ TEST(FiniteStrainPatch, HomogeneousDeformationsLeaveTheInteriorNodesInEquilibriu
             const Rectangle rect{xs[i + 1] - xs[i], ys[j + 1] - ys[j], xs[i]};
             const FiniteStrainQuadrature q = kinematics->finite_strain_quadrature(rect, kind);
             const ElementVector ue = homogeneous_unknowns(rect, ys[j], c.f);
-            for (const DeformationGradient& F : q.law_gradients(ue)) EXPECT_LE((F - expected).norm(), 1e-14);
+            for (const Deformation& F : q.law_gradients(ue)) EXPECT_LE((F.F() - expected).norm(), 1e-14);
             const ElementResponse r = respond(q, *law, ue, 4 * static_cast<std::size_t>(3 * i + j));
             stress_scale = std::max(stress_scale, law->respond(0, expected).nominal.norm());
             const int nodes[4] = {4 * i + j, 4 * i + j + 1, 4 * (i + 1) + j, 4 * (i + 1) + j + 1};
@@ -306,6 +306,38 @@ TEST(FiniteStrainElement, TheTangentMatchesCentralDifferencesOfTheForce) {
           }
           const double scale = r.tangent.cwiseAbs().maxCoeff();
           EXPECT_LE((r.tangent - fd).cwiseAbs().maxCoeff(), 2e-6 * scale) << r.tangent << "\n\n" << fd;
+        }
+      }
+    }
+  }
+}
+
+TEST(FiniteStrainElement, AStrainOfOnePartInATrillionKeepsItsRelativePrecision) {
+  // A coarse element far from the punch strains by 1e-9 and less.  Its finite-strain force is the
+  // small-strain K ue to O(strain) relative, and to round-off beyond that: the strain is formed
+  // from the displacement gradient H, not from F = I + H, which rounds it to 1e-16 absolute
+  // (1e-4 relative here).  Q1 and F-bar (whose linearization is B-bar), both kinematics, an
+  // elastic Hencky law and J2 in its elastic range.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> c(-1.0, 1.0);
+  for (const SceneKind scene : {SceneKind::plane_strain, SceneKind::axisymmetric}) {
+    for (const ElementKind kind : {ElementKind::q1, ElementKind::bbar}) {
+      SCOPED_TRACE(std::string(scene == SceneKind::axisymmetric ? "axisymmetric" : "plane strain") +
+                   (kind == ElementKind::bbar ? " F-bar" : " Q1"));
+      const Rectangle rect{0.5, 0.8, 0.3};
+      const auto kinematics = make_kinematics(scene);
+      const FiniteStrainQuadrature q = kinematics->finite_strain_quadrature(rect, kind);
+      const ElementMatrix k = kinematics->elastic_stiffness(rect, steel.lame(), kind);
+      std::vector<std::unique_ptr<FiniteStrainPointLaw>> laws;
+      laws.push_back(hencky_elastic());
+      laws.push_back(std::make_unique<J2LogStrainPointLaw>(J2Law(steel, std::make_shared<PowerLawHardening>(400e6, steel.E, 0.2)), 4));
+      for (int trial = 0; trial < 4; ++trial) {
+        ElementVector ue;
+        for (double& v : ue) v = 1e-12 * c(rng);
+        const ElementVector small_strain = k * ue;
+        for (const auto& law : laws) {
+          const ElementVector force = respond(q, *law, ue).force;
+          EXPECT_LE((force - small_strain).norm(), 1e-9 * small_strain.norm()) << force.transpose() << "\n" << small_strain.transpose();
         }
       }
     }

@@ -72,35 +72,40 @@ Eigen::Matrix<double, 1, 5> jacobian_derivative(const DeformationGradient& F) {
       .finished();
 }
 
-/// F-bar's scaling: s = (J-bar / J_g)^(1/d) at each point and ds/due, and which components it
-/// scales (all five about the axis; the in-plane four in plane strain).
+/// F-bar's scaling: s = (J-bar / J_g)^(1/d) at each point (and s - 1, as precise as H) and
+/// ds/due, and which components it scales (all five about the axis; the in-plane four in plane
+/// strain).
 struct FBarScaling {
   std::array<double, 4> s{1.0, 1.0, 1.0, 1.0};
+  std::array<double, 4> s_excess{};
   std::array<Eigen::Matrix<double, 1, 8>, 4> ds{};
   Eigen::Matrix<double, 5, 1> scaled = Eigen::Matrix<double, 5, 1>::Ones();
 };
-FBarScaling f_bar_scaling(const FiniteStrainQuadrature& q, const std::array<DeformationGradient, 4>& F) {
+FBarScaling f_bar_scaling(const FiniteStrainQuadrature& q, const std::array<Deformation, 4>& F) {
   FBarScaling f;
   for (auto& d : f.ds) d.setZero();
   if (q.dilatation_dimensions == 2) f.scaled[4] = 0.0;
   if (!q.f_bar) return f;
-  double mean = 0.0, volume = 0.0;
+  double mean_excess = 0.0, volume = 0.0;
   Eigen::Matrix<double, 1, 8> d_mean = Eigen::Matrix<double, 1, 8>::Zero();
-  std::array<double, 4> j{};
+  std::array<double, 4> j_excess{};
   std::array<Eigen::Matrix<double, 1, 8>, 4> dj;
   for (std::size_t p = 0; p < 4; ++p) {
-    j[p] = jacobian(F[p]);
-    dj[p] = jacobian_derivative(F[p]) * q.g[p];
-    mean += q.volume[p] * j[p];
+    j_excess[p] = jacobian_excess(F[p]);
+    dj[p] = jacobian_derivative(F[p].F()) * q.g[p];
+    mean_excess += q.volume[p] * j_excess[p];
     d_mean += q.volume[p] * dj[p];
     volume += q.volume[p];
   }
-  mean /= volume;
+  mean_excess /= volume;
   d_mean /= volume;
-  const double d = q.dilatation_dimensions;
+  const double d = q.dilatation_dimensions, mean = 1.0 + mean_excess;
   for (std::size_t p = 0; p < 4; ++p) {
-    f.s[p] = std::pow(mean / j[p], 1.0 / d);
-    f.ds[p] = f.s[p] / d * (d_mean / mean - dj[p] / j[p]);
+    const double j = 1.0 + j_excess[p];
+    // s - 1 = (J-bar / J)^(1/d) - 1 with J-bar / J - 1 = (J-bar - J) / J.
+    f.s_excess[p] = std::expm1(std::log1p((mean_excess - j_excess[p]) / j) / d);
+    f.s[p] = 1.0 + f.s_excess[p];
+    f.ds[p] = f.s[p] / d * (d_mean / mean - dj[p] / j);
   }
   return f;
 }
@@ -114,17 +119,24 @@ DeformationGradient scale(const DeformationGradient& v, double s, const Eigen::M
 }
 }  // namespace
 
-std::array<DeformationGradient, 4> FiniteStrainQuadrature::gradients(const ElementVector& ue) const {
-  std::array<DeformationGradient, 4> F;
-  for (std::size_t p = 0; p < 4; ++p) F[p] = identity_deformation() + g[p] * ue;
+std::array<Deformation, 4> FiniteStrainQuadrature::gradients(const ElementVector& ue) const {
+  std::array<Deformation, 4> F;
+  for (std::size_t p = 0; p < 4; ++p) F[p] = Deformation::from_displacement_gradient(g[p] * ue);
   return F;
 }
 
-std::array<DeformationGradient, 4> FiniteStrainQuadrature::law_gradients(const ElementVector& ue) const {
-  std::array<DeformationGradient, 4> F = gradients(ue);
+std::array<Deformation, 4> FiniteStrainQuadrature::law_gradients(const ElementVector& ue) const {
+  std::array<Deformation, 4> F = gradients(ue);
   if (!f_bar) return F;
   const FBarScaling f = f_bar_scaling(*this, F);
-  for (std::size_t p = 0; p < 4; ++p) F[p] = scale(F[p], f.s[p], f.scaled);
+  // F-bar = s F on the scaled components: H-bar = s H + (s - 1) I there.
+  const DeformationGradient identity = identity_deformation();
+  for (std::size_t p = 0; p < 4; ++p) {
+    DeformationGradient h = F[p].H();
+    for (int i = 0; i < 5; ++i)
+      if (f.scaled[i] != 0.0) h[i] = f.s[p] * h[i] + f.s_excess[p] * identity[i];
+    F[p] = Deformation::from_displacement_gradient(h);
+  }
   return F;
 }
 
@@ -147,11 +159,11 @@ ElementMatrix FiniteStrainQuadrature::stiffness(const ElementVector& ue, const s
   }
   // P_mod = S P(F-bar), F-bar = S F with S = diag(s on the scaled components):
   //   dP_mod = S A (S G + (scaled o F) ds) + (scaled o P) ds.
-  const std::array<DeformationGradient, 4> F = gradients(ue);
+  const std::array<Deformation, 4> F = gradients(ue);
   const FBarScaling f = f_bar_scaling(*this, F);
   for (std::size_t p = 0; p < 4; ++p) {
     const Eigen::Matrix<double, 5, 5> S = scale(DeformationGradient::Ones(), f.s[p], f.scaled).asDiagonal();
-    const Eigen::Matrix<double, 5, 8> d_f_bar = S * g[p] + F[p].cwiseProduct(f.scaled) * f.ds[p];
+    const Eigen::Matrix<double, 5, 8> d_f_bar = S * g[p] + F[p].F().cwiseProduct(f.scaled) * f.ds[p];
     const Eigen::Matrix<double, 5, 8> d_p = S * law_tangent[p] * d_f_bar + law_stress[p].cwiseProduct(f.scaled) * f.ds[p];
     k.noalias() += volume[p] * g[p].transpose() * d_p;
   }

@@ -41,23 +41,28 @@ DividedLogDifference divided_log_difference(double y) {
   return {g, (1.0 / (1.0 - y) - g) / (2.0 * y)};
 }
 
-/// ln M of a symmetric positive definite 2x2 M and its directional derivative.  A function f of a
-/// 2x2 matrix is alpha I + beta M (Cayley-Hamilton): with eigenvalues l = m +- r,
+/// ln M of a symmetric positive definite 2x2 M = I + X and its directional derivative, from X.
+/// A function f of a 2x2 matrix is alpha I + beta M (Cayley-Hamilton): with eigenvalues l = m +- r,
 ///   beta = (ln l1 - ln l2) / (l1 - l2) = g(r^2 / m^2) / m,  alpha = 1/2 ln det M - beta m,
-/// both smooth in M's entries, equal eigenvalues included (no eigenvectors are formed).
+/// both smooth in M's entries, equal eigenvalues included (no eigenvectors are formed).  Written
+/// as ln M = (1/2 ln det M - beta (m - 1)) I + beta X with ln det M = log1p(det M - 1) and
+/// det M - 1 = tr X + det X, it is as precise relative to ln M as X is: no 1 is added and taken
+/// away again.
 class SymmetricLogarithm {
 public:
-  explicit SymmetricLogarithm(const Matrix2& m) : m_(m) {
-    mean_ = 0.5 * (m(0, 0) + m(1, 1));
-    const double half_difference = 0.5 * (m(0, 0) - m(1, 1));
-    q_ = half_difference * half_difference + m(0, 1) * m(0, 1);
-    det_ = m(0, 0) * m(1, 1) - m(0, 1) * m(0, 1);
+  explicit SymmetricLogarithm(const Matrix2& x) : x_(x), m_(Matrix2::Identity() + x) {
+    mean_excess_ = 0.5 * (x(0, 0) + x(1, 1));
+    mean_ = 1.0 + mean_excess_;
+    const double half_difference = 0.5 * (x(0, 0) - x(1, 1));
+    q_ = half_difference * half_difference + x(0, 1) * x(0, 1);
+    const double det_excess = x(0, 0) + x(1, 1) + (x(0, 0) * x(1, 1) - x(0, 1) * x(0, 1));
+    det_ = 1.0 + det_excess;
+    log_det_ = std::log1p(det_excess);
     y_ = q_ / (mean_ * mean_);
     d_ = divided_log_difference(y_);
     beta_ = d_.g / mean_;
-    alpha_ = 0.5 * std::log(det_) - beta_ * mean_;
   }
-  Matrix2 value() const { return alpha_ * Matrix2::Identity() + beta_ * m_; }
+  Matrix2 value() const { return (0.5 * log_det_ - beta_ * mean_excess_) * Matrix2::Identity() + beta_ * x_; }
   /// d ln M [dM] for a symmetric dM.
   Matrix2 derivative(const Matrix2& dm) const {
     const double d_mean = 0.5 * (dm(0, 0) + dm(1, 1));
@@ -70,8 +75,8 @@ public:
   }
 
 private:
-  Matrix2 m_;
-  double mean_ = 0.0, q_ = 0.0, det_ = 0.0, y_ = 0.0, alpha_ = 0.0, beta_ = 0.0;
+  Matrix2 x_, m_;
+  double mean_excess_ = 0.0, mean_ = 0.0, q_ = 0.0, det_ = 0.0, log_det_ = 0.0, y_ = 0.0, beta_ = 0.0;
   DividedLogDifference d_{};
 };
 
@@ -80,16 +85,35 @@ private:
 DeformationGradient identity_deformation() { return (DeformationGradient() << 1.0, 0.0, 0.0, 1.0, 1.0).finished(); }
 SymmetricTensor identity_tensor() { return SymmetricTensor(1.0, 1.0, 0.0, 1.0); }
 
+Deformation::Deformation(const DeformationGradient& F) : F_(F), H_(F - identity_deformation()) {}
+
+Deformation Deformation::from_displacement_gradient(const DeformationGradient& H) {
+  Deformation d;
+  d.H_ = H;
+  d.F_ = identity_deformation() + H;
+  return d;
+}
+
 double jacobian(const DeformationGradient& F) { return (F[0] * F[3] - F[1] * F[2]) * F[4]; }
 
-LogarithmicStrain logarithmic_strain(const DeformationGradient& F, const SymmetricTensor& G) {
-  const Matrix2 f = in_plane(F), g = symmetric_in_plane(G);
-  const Matrix2 b = f * g * f.transpose();
-  const SymmetricLogarithm log_b(b);
+double jacobian_excess(const Deformation& F) {
+  const DeformationGradient& h = F.H();
+  const double in_plane_excess = h[0] + h[3] + (h[0] * h[3] - h[1] * h[2]);
+  return in_plane_excess + h[4] * (1.0 + in_plane_excess);
+}
+
+LogarithmicStrain logarithmic_strain(const Deformation& deformation, const SymmetricTensor& G) {
+  const DeformationGradient& F = deformation.F();
+  const Matrix2 f = in_plane(F), g = symmetric_in_plane(G), h = in_plane(deformation.H());
+  // b - I = (G - I) + H G + G H^T + H G H^T of F G F^T with F = I + H.
+  const Matrix2 g_excess = g - Matrix2::Identity(), hg = h * g;
+  const Matrix2 b_excess = g_excess + hg + hg.transpose() + hg * h.transpose();
+  const SymmetricLogarithm log_b(0.5 * (b_excess + b_excess.transpose()));
   const Matrix2 l = log_b.value();
   LogarithmicStrain e;
-  // e = 1/2 ln b; the engineering shear is 2 e12 = l12.
-  e.strain = VoigtVector(0.5 * l(0, 0), 0.5 * l(1, 1), l(0, 1), 0.5 * std::log(F[4] * F[4] * G[3]));
+  // e = 1/2 ln b; the engineering shear is 2 e12 = l12.  e33 = ln F33 + 1/2 ln G33.
+  e.strain = VoigtVector(0.5 * l(0, 0), 0.5 * l(1, 1), l(0, 1),
+                         std::log1p(deformation.H()[4]) + 0.5 * std::log1p(G[3] - 1.0));
   for (int k = 0; k < 4; ++k) {
     const Matrix2 db = unit(k) * g * f.transpose() + f * g * unit(k).transpose();
     const Matrix2 dl = log_b.derivative(db);

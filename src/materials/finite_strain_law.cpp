@@ -7,7 +7,7 @@ namespace indentsim {
 HenckyPointLaw::HenckyPointLaw(const ElasticMaterial& elastic, std::unique_ptr<PointLaw> law)
     : elastic_(elastic.stiffness()), law_(std::move(law)) {}
 
-FiniteStrainResponse HenckyPointLaw::respond(std::size_t point, const DeformationGradient& F) const {
+FiniteStrainResponse HenckyPointLaw::respond(std::size_t point, const Deformation& F) const {
   const LogarithmicStrain e = logarithmic_strain(F, identity_tensor());
   FiniteStrainResponse r;
   ConstitutiveMatrix d = elastic_;
@@ -19,19 +19,19 @@ FiniteStrainResponse HenckyPointLaw::respond(std::size_t point, const Deformatio
   } else {
     r.kirchhoff = elastic_ * e.strain;
   }
-  const NominalResponse p = nominal_response(F, r.kirchhoff, d, e.derivative);
+  const NominalResponse p = nominal_response(F.F(), r.kirchhoff, d, e.derivative);
   r.nominal = p.stress;
   r.tangent = p.tangent;
   return r;
 }
 
-NominalTangent HenckyPointLaw::unloading_tangent(std::size_t point, const DeformationGradient& F) const {
+NominalTangent HenckyPointLaw::unloading_tangent(std::size_t point, const Deformation& F) const {
   const LogarithmicStrain e = logarithmic_strain(F, identity_tensor());
   const VoigtVector tau = law_ ? law_->respond(point, e.strain).stress : VoigtVector(elastic_ * e.strain);
-  return nominal_response(F, tau, elastic_, e.derivative).tangent;
+  return nominal_response(F.F(), tau, elastic_, e.derivative).tangent;
 }
 
-void HenckyPointLaw::commit(std::size_t point, const DeformationGradient& F) {
+void HenckyPointLaw::commit(std::size_t point, const Deformation& F) {
   if (law_) law_->commit(point, logarithmic_strain(F, identity_tensor()).strain);
 }
 
@@ -43,7 +43,7 @@ void HenckyPointLaw::restore(const std::vector<double>& history) {
 // ---------------------------------------------------------------------------------------------
 J2LogStrainPointLaw::J2LogStrainPointLaw(const J2Law& law, std::size_t points) : law_(law), state_(points) {}
 
-FiniteStrainResponse J2LogStrainPointLaw::respond(const DeformationGradient& F, const J2FiniteState& old,
+FiniteStrainResponse J2LogStrainPointLaw::respond(const Deformation& F, const J2FiniteState& old,
                                                   J2FiniteState* updated) const {
   const LogarithmicStrain trial = logarithmic_strain(F, old.inverse_plastic_metric);
   // The small-strain return from a state without plastic strain: its trial deviator is
@@ -54,7 +54,7 @@ FiniteStrainResponse J2LogStrainPointLaw::respond(const DeformationGradient& F, 
   FiniteStrainResponse r;
   r.kirchhoff = j.stress;
   r.plastic = j.plastic;
-  const NominalResponse p = nominal_response(F, j.stress, j.tangent, trial.derivative);
+  const NominalResponse p = nominal_response(F.F(), j.stress, j.tangent, trial.derivative);
   r.nominal = p.stress;
   r.tangent = p.tangent;
   if (updated) {
@@ -62,24 +62,24 @@ FiniteStrainResponse J2LogStrainPointLaw::respond(const DeformationGradient& F, 
     const Eigen::Vector4d& dp = j.state.plastic_strain;
     const VoigtVector elastic(trial.strain[0] - dp[0], trial.strain[1] - dp[1], trial.strain[2] - 2.0 * dp[3],
                               trial.strain[3] - dp[2]);
-    updated->inverse_plastic_metric = pull_back(F, exponential_of_twice(elastic));
+    updated->inverse_plastic_metric = pull_back(F.F(), exponential_of_twice(elastic));
     updated->equivalent_plastic_strain = j.state.equivalent_plastic_strain;
   }
   return r;
 }
 
-FiniteStrainResponse J2LogStrainPointLaw::respond(std::size_t point, const DeformationGradient& F) const {
+FiniteStrainResponse J2LogStrainPointLaw::respond(std::size_t point, const Deformation& F) const {
   return respond(F, state_[point], nullptr);
 }
 
-NominalTangent J2LogStrainPointLaw::unloading_tangent(std::size_t point, const DeformationGradient& F) const {
+NominalTangent J2LogStrainPointLaw::unloading_tangent(std::size_t point, const Deformation& F) const {
   const LogarithmicStrain trial = logarithmic_strain(F, state_[point].inverse_plastic_metric);
   J2State small;
   small.equivalent_plastic_strain = state_[point].equivalent_plastic_strain;
-  return nominal_response(F, law_.respond(trial.strain, small).stress, law_.elastic_stiffness(), trial.derivative).tangent;
+  return nominal_response(F.F(), law_.respond(trial.strain, small).stress, law_.elastic_stiffness(), trial.derivative).tangent;
 }
 
-void J2LogStrainPointLaw::commit(std::size_t point, const DeformationGradient& F) {
+void J2LogStrainPointLaw::commit(std::size_t point, const Deformation& F) {
   J2FiniteState updated;
   respond(F, state_[point], &updated);
   // An elastic step leaves C_p^-1 as it was (exp(2 e_e^tr) pulled back is C_p^-1 to round-off).

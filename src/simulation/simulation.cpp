@@ -360,25 +360,28 @@ bool Simulation::grow_near_field(const std::vector<double>& u, double alpha) {
   bool penetrates = false;
   for (std::size_t k = static_cast<std::size_t>(state_.near_field.contact_nodes); k < candidates.size(); ++k)
     if (u[candidates[k].equation] + alpha - candidates[k].surface_height > tolerance) penetrates = true;
-  // A far element that would leave the elastic range: the near elements must reach it.
-  bool yields = false;
+  // A far element that would leave the elastic range: the near elements must reach it, in the
+  // direction it lies (beside the near field, below it, or both at a corner).  Growing both ways
+  // at once spread a cone's near field, whose strains ran ahead in depth, over the whole width of
+  // a graded 3 mm specimen: 26663 unknowns where 1392 wide sufficed.
+  bool beside = false, below = false;
   if (plastic_) {
     const int top = mesh_->elements_y() - 1;
-    for (int ei = 0; ei < mesh_->elements_x() && !yields; ++ei)
+    for (int ei = 0; ei < mesh_->elements_x() && !(beside && below); ++ei)
       for (int ej = 0; ej < mesh_->elements_y(); ++ej) {
-        if (ei < state_.near_field.elements_x && ej > top - state_.near_field.elements_y) continue;
+        const bool outside_x = ei >= state_.near_field.elements_x;
+        const bool outside_y = ej <= top - state_.near_field.elements_y;
+        if (!(outside_x && !beside) && !(outside_y && !below)) continue;  // inside, or would tell nothing new
         if (plastic_->departs_at(ei, ej, u.data())) {
-          yields = true;
-          break;
+          beside = beside || outside_x;
+          below = below || outside_y;
         }
       }
   }
-  if (!penetrates && !yields) return false;
+  if (!penetrates && !beside && !below) return false;
   const auto grown = [](int count, int limit) { return std::min(limit, count + count / 2 + 2); };
-  if (yields) {
-    state_.near_field.elements_x = grown(state_.near_field.elements_x, mesh_->elements_x());
-    state_.near_field.elements_y = grown(state_.near_field.elements_y, mesh_->elements_y());
-  }
+  if (beside) state_.near_field.elements_x = grown(state_.near_field.elements_x, mesh_->elements_x());
+  if (below) state_.near_field.elements_y = grown(state_.near_field.elements_y, mesh_->elements_y());
   if (penetrates) state_.near_field.contact_nodes = grown(state_.near_field.contact_nodes, mesh_->nodes_x());
   if (plastic_) state_.near_field.contact_nodes = std::max(state_.near_field.contact_nodes, std::min(state_.near_field.elements_x + 1, mesh_->nodes_x()));
   return true;

@@ -80,8 +80,8 @@ bool FiniteStrainBulk::departs_at(int ei, int ej, const double* u) const {
   const ElementVector ue = gather(mesh_, ei, ej, u);
   const FiniteStrainQuadrature& q = quadrature(ei, ej);
   const auto F = q.gradients(ue);
-  for (const DeformationGradient& f : F)
-    if ((f - identity_deformation()).cwiseAbs().maxCoeff() > small_strain_limit) return true;
+  for (const Deformation& f : F)
+    if (f.H().cwiseAbs().maxCoeff() > small_strain_limit) return true;
   const std::size_t first = 4 * static_cast<std::size_t>(mesh_.element(ei, ej));
   const auto law_F = q.law_gradients(ue);
   for (std::size_t g = 0; g < 4; ++g)
@@ -96,8 +96,8 @@ double FiniteStrainBulk::largest_gradient_outside(const std::vector<ElementSlot>
   for (int ei = 0; ei < mesh_.elements_x(); ++ei)
     for (int ej = 0; ej < mesh_.elements_y(); ++ej) {
       if (inside[static_cast<std::size_t>(mesh_.element(ei, ej))]) continue;
-      for (const DeformationGradient& f : quadrature(ei, ej).gradients(gather(mesh_, ei, ej, committed_u_.data())))
-        largest = std::max(largest, (f - identity_deformation()).cwiseAbs().maxCoeff());
+      for (const Deformation& f : quadrature(ei, ej).gradients(gather(mesh_, ei, ej, committed_u_.data())))
+        largest = std::max(largest, f.H().cwiseAbs().maxCoeff());
     }
   return largest;
 }
@@ -139,7 +139,7 @@ std::array<GaussPointState, 4> FiniteStrainBulk::gauss_point_states(int ei, int 
   for (std::size_t g = 0; g < 4; ++g) {
     const FiniteStrainResponse r = law_->respond(first + g, F[g]);
     // Cauchy stress sigma = tau / J on the current configuration.
-    states[g] = {r.kirchhoff / jacobian(F[g]), strain_intensity(logarithmic_strain(F[g], identity_tensor()).strain), 0.0,
+    states[g] = {r.kirchhoff / jacobian(F[g].F()), strain_intensity(logarithmic_strain(F[g], identity_tensor()).strain), 0.0,
                  law_->has_yielded(first + g)};
   }
   return states;

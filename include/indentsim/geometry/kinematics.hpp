@@ -55,9 +55,9 @@ struct FiniteStrainQuadrature {
   int dilatation_dimensions = 2;
 
   /// F at each point from the element's unknowns (paper order).
-  std::array<DeformationGradient, 4> gradients(const ElementVector& ue) const;
+  std::array<Deformation, 4> gradients(const ElementVector& ue) const;
   /// What the law takes at each point: F, or F-bar.
-  std::array<DeformationGradient, 4> law_gradients(const ElementVector& ue) const;
+  std::array<Deformation, 4> law_gradients(const ElementVector& ue) const;
   /// sum_g V_g G_g^T P_g with P_g the nominal stress of the law at law_gradients(ue) (F-bar:
   /// scaled back to F, P (J-bar / J)^(1/d) on the scaled components).
   ElementVector internal_force(const ElementVector& ue, const std::array<NominalStress, 4>& law_stress) const;

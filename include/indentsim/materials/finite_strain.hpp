@@ -28,6 +28,24 @@ using StrainGradient = Eigen::Matrix<double, 4, 5>;
 /// The identity in F's components.
 DeformationGradient identity_deformation();
 
+/// A deformation gradient F = I + H held with its displacement gradient H (in F's components), of
+/// which the strains are computed: F rounds a strain to 1e-16 absolute, H keeps its relative
+/// precision.  A coarse element far from the punch strains by 1e-9 and less, and that rounding,
+/// times its stiffness, made a residual above Newton's tolerance (docs/MODEL.md §12.3).
+class Deformation {
+public:
+  /// No deformation: F = I.
+  Deformation() : F_(identity_deformation()) {}
+  /// From F, with H = F - I: as precise as F itself (the tests' homogeneous gradients).
+  Deformation(const DeformationGradient& F);  // NOLINT(google-explicit-constructor): F is a deformation
+  static Deformation from_displacement_gradient(const DeformationGradient& H);
+  const DeformationGradient& F() const { return F_; }
+  const DeformationGradient& H() const { return H_; }
+
+private:
+  DeformationGradient F_, H_ = DeformationGradient::Zero();
+};
+
 /// A symmetric tensor of the scenes, in Voigt order (11, 22, 12, 33) with the tensor's own 12
 /// component (not the engineering shear): the metric tensors C_p^-1 and b_e.
 using SymmetricTensor = Eigen::Vector4d;
@@ -40,7 +58,8 @@ struct LogarithmicStrain {
   VoigtVector strain = VoigtVector::Zero();
   StrainGradient derivative = StrainGradient::Zero();
 };
-LogarithmicStrain logarithmic_strain(const DeformationGradient& F, const SymmetricTensor& G);
+/// Computed from H and G - I, so that it is as precise relative to e as H and G are.
+LogarithmicStrain logarithmic_strain(const Deformation& F, const SymmetricTensor& G);
 
 /// exp(2 e) of a tensor strain e given as a Voigt strain (e11, e22, 2 e12, e33): the elastic left
 /// Cauchy-Green tensor b_e of an elastic logarithmic strain.
@@ -60,5 +79,7 @@ NominalResponse nominal_response(const DeformationGradient& F, const VoigtVector
 
 /// J = det F.
 double jacobian(const DeformationGradient& F);
+/// J - 1, as precise as H.
+double jacobian_excess(const Deformation& F);
 
 }  // namespace indentsim

@@ -31,13 +31,13 @@ struct FiniteStrainResponse {
 class FiniteStrainPointLaw {
 public:
   virtual ~FiniteStrainPointLaw() = default;
-  virtual FiniteStrainResponse respond(std::size_t point, const DeformationGradient& F) const = 0;
+  virtual FiniteStrainResponse respond(std::size_t point, const Deformation& F) const = 0;
   /// dP/dF of the elastic unloading from the committed state at F (the state's stress, the
   /// elastic moduli: J2's elastic predictor, Ilyushin's unloading theorem), for the exact
   /// unloading stiffness.
-  virtual NominalTangent unloading_tangent(std::size_t point, const DeformationGradient& F) const = 0;
+  virtual NominalTangent unloading_tangent(std::size_t point, const Deformation& F) const = 0;
   /// Accepts F as the converged state of the point.
-  virtual void commit(std::size_t point, const DeformationGradient& F) = 0;
+  virtual void commit(std::size_t point, const Deformation& F) = 0;
   virtual bool has_yielded(std::size_t point) const = 0;
   /// As PointLaw::set_loading: the branch of a law that follows the global load history.
   virtual void set_loading(bool /*beyond_previous_peak*/) {}
@@ -53,9 +53,9 @@ class HenckyPointLaw final : public FiniteStrainPointLaw {
 public:
   /// `law` may be null (elasticity).
   HenckyPointLaw(const ElasticMaterial& elastic, std::unique_ptr<PointLaw> law);
-  FiniteStrainResponse respond(std::size_t point, const DeformationGradient& F) const override;
-  NominalTangent unloading_tangent(std::size_t point, const DeformationGradient& F) const override;
-  void commit(std::size_t point, const DeformationGradient& F) override;
+  FiniteStrainResponse respond(std::size_t point, const Deformation& F) const override;
+  NominalTangent unloading_tangent(std::size_t point, const Deformation& F) const override;
+  void commit(std::size_t point, const Deformation& F) override;
   bool has_yielded(std::size_t point) const override { return law_ && law_->has_yielded(point); }
   void set_loading(bool beyond_previous_peak) override {
     if (law_) law_->set_loading(beyond_previous_peak);
@@ -81,9 +81,9 @@ struct J2FiniteState {
 class J2LogStrainPointLaw final : public FiniteStrainPointLaw {
 public:
   J2LogStrainPointLaw(const J2Law& law, std::size_t points);
-  FiniteStrainResponse respond(std::size_t point, const DeformationGradient& F) const override;
-  NominalTangent unloading_tangent(std::size_t point, const DeformationGradient& F) const override;
-  void commit(std::size_t point, const DeformationGradient& F) override;
+  FiniteStrainResponse respond(std::size_t point, const Deformation& F) const override;
+  NominalTangent unloading_tangent(std::size_t point, const Deformation& F) const override;
+  void commit(std::size_t point, const Deformation& F) override;
   bool has_yielded(std::size_t point) const override { return state_[point].equivalent_plastic_strain > 0.0; }
   std::vector<double> history() const override;
   void restore(const std::vector<double>& history) override;
@@ -91,7 +91,7 @@ public:
 
 private:
   /// The response and the state it leaves.
-  FiniteStrainResponse respond(const DeformationGradient& F, const J2FiniteState& old, J2FiniteState* updated) const;
+  FiniteStrainResponse respond(const Deformation& F, const J2FiniteState& old, J2FiniteState* updated) const;
   J2Law law_;
   std::vector<J2FiniteState, Eigen::aligned_allocator<J2FiniteState>> state_;
 };
