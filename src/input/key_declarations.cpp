@@ -163,10 +163,10 @@ const std::vector<KeyDeclaration>& key_declarations() {
     k.push_back(choice_key({"geometry", "strain", "choice", "", "",
                             "small (the paper's: linearized strain, the gap at the undeformed surface); finite "
                             "(total Lagrangian, Hencky strain, J2 in the multiplicative split, F-bar for bbar, the gap "
-                            "at the surface's current position; KLU; node_to_rigid contact without friction); auto "
-                            "(finite where its geometric share of P, about 0.25 alpha / a elastic and 0.06 alpha / a "
-                            "plastic with a the punch's own (Sneddon) contact estimate at the deepest point, exceeds "
-                            "mesh.target_error or 2e-3; small where finite strain is not built: friction, the "
+                            "at the surface's current position, with or without friction; KLU; node_to_rigid "
+                            "contact); auto (finite where its geometric share of P, about 0.25 alpha / a elastic and "
+                            "0.06 alpha / a plastic with a the punch's own (Sneddon) contact estimate at the deepest "
+                            "point, exceeds mesh.target_error or 2e-3; small where finite strain is not built: the "
                             "integrated gap, cholmod)"},
                            strain_names, [](auto& c) -> auto& { return c.geometry.strain; }));
     {

@@ -190,15 +190,12 @@ void validate(const LoadCase& lc) {
                          "unloading (waypoint {}) has no solution: give a finite coefficient (mu = 10 slides only "
                          "where the normal force nearly vanishes)",
                          i));
-  // Finite strain is built on node-to-rigid's rows (docs/MODEL.md §12.2); its contact rows and
-  // F-bar's tangent are unsymmetric.
+  // Finite strain is built on node-to-rigid's rows, with or without friction (docs/MODEL.md
+  // §12.3); its contact rows and F-bar's tangent are unsymmetric.
   if (lc.geometry.strain == StrainChoice::finite) {
     if (lc.contact.discretization != ContactDiscretizationChoice::node_to_rigid)
       fail("geometry.strain", "\"finite\" is built with contact.discretization = \"node_to_rigid\" only (the "
                               "integrated gap on the current surface is not built yet)");
-    if (lc.contact.friction > 0.0)
-      fail("geometry.strain", "\"finite\" is built for frictionless contact only (contact.friction = 0): friction on "
-                              "the current surface is not built yet");
     if (lc.solver.linear == LinearSolverChoice::cholmod)
       fail("solver.linear", "\"cholmod\" cannot factor finite strain's unsymmetric rows (the contact on the current "
                             "surface, F-bar): use \"klu\" or \"auto\"");

@@ -227,8 +227,6 @@ double finite_strain_share(const LoadCase& lc) { return geometric_share_per_stra
 
 std::pair<StrainChoice, std::string> choose_strain(const LoadCase& lc) {
   if (lc.geometry.strain != StrainChoice::automatic) return {lc.geometry.strain, lc.geometry.strain_reason};
-  if (lc.contact.friction > 0.0)
-    return {StrainChoice::small, "auto: small, as finite strain is not built with friction (contact.friction > 0)"};
   if (lc.contact.discretization != ContactDiscretizationChoice::node_to_rigid)
     return {StrainChoice::small, "auto: small, as finite strain is not built with the integrated gap"};
   if (lc.solver.linear == LinearSolverChoice::cholmod)

@@ -1,6 +1,7 @@
 #include "indentsim/simulation/simulation.hpp"
 #include "indentsim/solvers/unloading_stiffness.hpp"
 #include "indentsim/solvers/coulomb_contact.hpp"
+#include "indentsim/solvers/coulomb_current_configuration_contact.hpp"
 #include "indentsim/solvers/integrated_gap_contact.hpp"
 #include "indentsim/solvers/current_configuration_contact.hpp"
 #include "indentsim/solvers/finite_strain_bulk.hpp"
@@ -101,7 +102,10 @@ void Simulation::build(const RunConfiguration& configuration, const std::optiona
     plastic_ = std::make_unique<InelasticBulk>(*stiffness_, std::move(point_law));
     bulk_ = plastic_.get();
   }
-  if (config_.strain == StrainChoice::finite)
+  if (config_.strain == StrainChoice::finite && load_case_.contact.friction > 0.0)
+    contact_ = std::make_unique<CoulombCurrentConfigurationContact>(*mesh_, make_punch(load_case_.punch), *pattern_,
+                                                                    stiffness_->values(), load_case_.contact.friction);
+  else if (config_.strain == StrainChoice::finite)
     contact_ = std::make_unique<CurrentConfigurationContact>(*mesh_, make_punch(load_case_.punch), *pattern_,
                                                              stiffness_->values());
   else if (load_case_.contact.discretization == ContactDiscretizationChoice::integrated_gap)
@@ -453,7 +457,7 @@ double Simulation::unloading_stiffness(const ContactResult& c) const {
   if (plastic_)
     if (const auto tangent = plastic_->unloading_tangent(state_.u.data()))
       return unloading_stiffness_of_tangent(*pattern_, *tangent, *contact_, state_.u.data(), internal_force.data(),
-                                            state_.alpha);
+                                            state_.alpha, c);
   return elastic_unloading_stiffness(*stiffness_, *contact_, state_.u.data(), internal_force.data(), state_.alpha, c);
 }
 

@@ -14,6 +14,16 @@ int contact_candidate_count(const Mesh& mesh, const PunchShape& punch) {
   return count;  // beyond the punch's rim: never touched
 }
 
+ContactResult ContactResult::open(std::size_t candidates) {
+  ContactResult r;
+  r.nodal_force.assign(candidates, 0.0);
+  r.in_contact.assign(candidates, 0);
+  r.gap.assign(candidates, 0.0);
+  r.tangential_force.assign(candidates, 0.0);
+  r.sliding.assign(candidates, 0);
+  return r;
+}
+
 std::vector<int> tangential_row_indices(const std::vector<ContactCandidate>& candidates) {
   std::vector<int> rows(candidates.size(), -1);
   int next = static_cast<int>(candidates.size());
@@ -126,12 +136,7 @@ std::vector<double> NodeToRigidContact::admissibility_violation(const double* u,
 
 ContactResult NodeToRigidContact::evaluate(const double* u, const double* internal_force, double alpha) const {
   const auto& cs = candidates();
-  ContactResult r;
-  r.nodal_force.assign(cs.size(), 0.0);
-  r.in_contact.assign(cs.size(), 0);
-  r.gap.assign(cs.size(), 0.0);
-  r.tangential_force.assign(cs.size(), 0.0);
-  r.sliding.assign(cs.size(), 0);
+  ContactResult r = ContactResult::open(cs.size());
   double half_model_force = 0.0;
   for (std::size_t k = 0; k < cs.size(); ++k) {
     const double fk = internal_force[cs[k].equation];

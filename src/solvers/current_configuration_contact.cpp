@@ -9,18 +9,12 @@
 
 namespace indentsim {
 
-namespace {
-
-/// g''(x) by central differences of g' (the profiles give g and g' in closed form or as cubics;
-/// the second derivative only enters the horizontal row's Jacobian).
-double curvature(const PunchShape& punch, double x, double scale) {
+double surface_curvature(const PunchShape& punch, double x, double scale) {
   const double h = 1e-6 * scale;
   const double plus = punch.slope(x + h), minus = punch.slope(std::max(0.0, x - h));
   if (!std::isfinite(plus) || !std::isfinite(minus)) return 0.0;
   return (plus - minus) / (x + h - std::max(0.0, x - h));
 }
-
-}  // namespace
 
 CurrentConfigurationContact::CurrentConfigurationContact(const Mesh& mesh, std::shared_ptr<const PunchShape> punch,
                                                          const StiffnessPattern& pattern,
@@ -93,7 +87,7 @@ std::uint64_t CurrentConfigurationContact::write_jacobian_rows(
       throw std::logic_error("a surface node's two unknowns couple to different unknowns: its contact rows cannot be formed");
     // d(r_u + g'(x) r_v) = dr_u + g' dr_v + g'' r_v du.
     for (std::size_t j = 0; j < horizontal.size(); ++j) values[horizontal[j]] += slope * values[vertical[j]];
-    values[pattern.diagonal_position(c.tangential_equation)] += curvature(*punch_shape(), x, scale) * row_force[k];
+    values[pattern.diagonal_position(c.tangential_equation)] += surface_curvature(*punch_shape(), x, scale) * row_force[k];
   }
   for (std::size_t k = 0; k < cs.size(); ++k) {
     if (!on[k]) continue;
@@ -150,12 +144,7 @@ std::vector<double> CurrentConfigurationContact::admissibility_violation(const d
 
 ContactResult CurrentConfigurationContact::evaluate(const double* u, const double* internal_force, double alpha) const {
   const auto& cs = candidates();
-  ContactResult r;
-  r.nodal_force.assign(cs.size(), 0.0);
-  r.in_contact.assign(cs.size(), 0);
-  r.gap.assign(cs.size(), 0.0);
-  r.tangential_force.assign(cs.size(), 0.0);
-  r.sliding.assign(cs.size(), 0);
+  ContactResult r = ContactResult::open(cs.size());
   double half_model_force = 0.0;
   for (std::size_t k = 0; k < cs.size(); ++k) {
     const double r_v = internal_force[cs[k].equation];

@@ -209,12 +209,7 @@ void IntegratedGapContact::write_depth_derivative_rows(const double* u, double a
 
 ContactResult IntegratedGapContact::evaluate(const double* u, const double* internal_force, double alpha) const {
   const auto& cs = candidates();
-  ContactResult r;
-  r.nodal_force.assign(cs.size(), 0.0);
-  r.in_contact.assign(cs.size(), 0);
-  r.gap.assign(cs.size(), 0.0);
-  r.tangential_force.assign(cs.size(), 0.0);
-  r.sliding.assign(cs.size(), 0);
+  ContactResult r = ContactResult::open(cs.size());
   std::vector<double> penalty_force(cs.size(), 0.0);
   integrate(u, alpha, [&](int e, double n0, double n1, double pi, double weight) {
     penalty_force[static_cast<std::size_t>(e)] += weight * pi * n0;

@@ -73,27 +73,41 @@ double linearized_unloading_stiffness(const StiffnessPattern& pattern, const std
 // branches w is proportional to delta, so S = f sum_k (K w)_k / delta, without a difference of
 // forces.  The sum runs over the nodes in contact at the state or after the increment: a contact
 // node that opens within it loses all its force, lambda_k = (K w)_k on its free row.
-double incremental_unloading_stiffness(const ElasticStiffness& stiffness, const ContactDiscretization& at_state,
-                                       const double* u, const double* internal_force, double alpha,
-                                       const ContactResult& state) {
+// `operator_values`, on `pattern`, is the bulk's unloading operator: K, or finite strain's tangent
+// at the state (whose contact rows are nonlinear in w: the step's error is O(delta^2) then).
+double incremental_unloading_stiffness(const StiffnessPattern& pattern, const std::vector<double>& operator_values,
+                                       const ContactDiscretization& at_state, const double* u,
+                                       const double* internal_force, double alpha, const ContactResult& state) {
   if (!(alpha > 0.0)) return 0.0;
   const std::unique_ptr<ContactDiscretization> reversed = at_state.at_load_reversal(u);
   const ContactDiscretization& contact = reversed ? *reversed : at_state;
-  const StiffnessPattern& pattern = stiffness.pattern();
   const auto n = static_cast<std::size_t>(pattern.size());
   const auto& rows = contact.row_equations();
   std::vector<std::vector<std::int64_t>> row_positions;
   for (int equation : rows) row_positions.push_back(pattern.row_positions(equation));
   const double delta = 1e-6 * alpha, target = alpha - delta;
+  // The state's force on the rows of the nodes in contact (the contact forces); every other row
+  // is in equilibrium at the state, and is taken so: what the state leaves of them (Newton's
+  // tolerance, and in finite strain the condensed far field's linearization, 1e-5 N at far
+  // surface nodes of the shipped cone) would otherwise load the increment, whose own forces are
+  // only S delta.
+  std::vector<double> state_force(n, 0.0);
+  for (std::size_t k = 0; k < contact.candidates().size() && k < state.in_contact.size(); ++k) {
+    if (!state.in_contact[k]) continue;
+    const ContactCandidate& c = contact.candidates()[k];
+    state_force[static_cast<std::size_t>(c.equation)] = internal_force[c.equation];
+    if (c.tangential_equation >= 0)
+      state_force[static_cast<std::size_t>(c.tangential_equation)] = internal_force[c.tangential_equation];
+  }
   std::vector<double> w(n, 0.0), x(n), kw(n), f(n), row_force(rows.size()), jacobian;
   const auto evaluate = [&] {
-    pattern.multiply(stiffness.values(), w.data(), kw.data());
+    pattern.multiply(operator_values, w.data(), kw.data());
     for (std::size_t i = 0; i < n; ++i) {
       x[i] = u[i] + w[i];
-      f[i] = internal_force[i] + kw[i];
+      f[i] = state_force[i] + kw[i];
     }
     for (std::size_t i = 0; i < rows.size(); ++i) row_force[i] = f[static_cast<std::size_t>(rows[i])];
-    jacobian = stiffness.values();
+    jacobian = operator_values;
     return contact.write_jacobian_rows(x.data(), target, row_force.data(), pattern, row_positions, jacobian.data());
   };
   std::uint64_t branches = evaluate();
@@ -125,7 +139,8 @@ double elastic_unloading_stiffness(const ElasticStiffness& stiffness, const Cont
                                    const double* u, const double* internal_force, double alpha,
                                    const ContactResult& state) {
   if (contact.carries_history())
-    return incremental_unloading_stiffness(stiffness, contact, u, internal_force, alpha, state);
+    return incremental_unloading_stiffness(stiffness.pattern(), stiffness.values(), contact, u, internal_force, alpha,
+                                           state);
   if (!contact.rows_pin_unknowns())
     return linearized_unloading_stiffness(stiffness.pattern(), stiffness.values(), contact, u, internal_force, alpha);
   const StiffnessPattern& pattern = stiffness.pattern();
@@ -177,9 +192,9 @@ double elastic_unloading_stiffness(const ElasticStiffness& stiffness, const Cont
 
 double unloading_stiffness_of_tangent(const StiffnessPattern& pattern, const std::vector<double>& tangent,
                                       const ContactDiscretization& contact, const double* u,
-                                      const double* internal_force, double alpha) {
+                                      const double* internal_force, double alpha, const ContactResult& state) {
   if (contact.carries_history())
-    throw std::logic_error("the unloading stiffness of a finite-strain tangent with contact rows that carry history");
+    return incremental_unloading_stiffness(pattern, tangent, contact, u, internal_force, alpha, state);
   return linearized_unloading_stiffness(pattern, tangent, contact, u, internal_force, alpha);
 }
 

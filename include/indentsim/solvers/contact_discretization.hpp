@@ -70,6 +70,9 @@ struct ContactResult {
   /// friction and on open nodes).
   std::vector<double> tangential_force;
   std::vector<char> sliding;  ///< per candidate: in contact with |q_k| = mu lambda_k (friction only)
+
+  /// No node in contact, every per-candidate field sized for `candidates`: where evaluate() starts.
+  static ContactResult open(std::size_t candidates);
 };
 
 /// Contact half-width (radius) a from the discrete solution, resolved inside the element where the

@@ -21,6 +21,10 @@
 
 namespace indentsim {
 
+/// g''(x) by central differences of g' over 1e-6 `scale` (the profiles give g and g' in closed
+/// form or as cubics; the second derivative only enters Jacobian rows); 0 beyond a rim.
+double surface_curvature(const PunchShape& punch, double x, double scale);
+
 class CurrentConfigurationContact final : public ContactDiscretization {
 public:
   CurrentConfigurationContact(const Mesh& mesh, std::shared_ptr<const PunchShape> punch, const StiffnessPattern& pattern,

@@ -31,9 +31,10 @@ double elastic_unloading_stiffness(const ElasticStiffness& stiffness, const Cont
 /// The same for a bulk whose unloading operator is not K (finite strain: the tangent at the
 /// state, geometric terms included), given as `tangent` on K's pattern: J w = -dF/d(alpha) with
 /// the contact's own Jacobian rows, S = -f sum_k (T w)_k over the candidates' vertical rows.
-/// Contacts that carry history are refused (std::logic_error): friction is not built in finite strain.
+/// Contacts that carry history (friction on the current surface): the one-sided derivative of an
+/// increment from the state on T, as above.
 double unloading_stiffness_of_tangent(const StiffnessPattern& pattern, const std::vector<double>& tangent,
                                       const ContactDiscretization& contact, const double* u,
-                                      const double* internal_force, double alpha);
+                                      const double* internal_force, double alpha, const ContactResult& state);
 
 }  // namespace indentsim
