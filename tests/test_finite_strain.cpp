@@ -439,8 +439,8 @@ namespace {
 /// The surface of a shipped case pressed onto its punch (some candidates past it, some short of
 /// it) with horizontal displacements that move the nodes along its face; the bulk in finite
 /// strain.  The Newton Jacobian of the whole system with the contact `make_contact` builds
-/// (given the displaced state) against central differences of its residual; `inspect` sees the
-/// contact at the state.
+/// (given the displaced state), and the contact rows' depth derivative, against central
+/// differences of its residual; `inspect` sees the contact at the state.
 using ContactFactory = std::function<std::unique_ptr<ContactDiscretization>(
     const Mesh&, const StiffnessPattern&, const ElasticStiffness&, std::shared_ptr<const PunchShape> punch, double alpha,
     const std::vector<double>& u)>;
@@ -511,6 +511,19 @@ void expect_jacobian_rows_are_the_residuals_derivative(
   for (const char on : contact->evaluate(u.data(), force.data(), alpha).in_contact) active += on;
   EXPECT_GT(active, 2);
   EXPECT_LT(active, static_cast<int>(cs.size()));
+  // The rows' derivative in the depth at fixed u (what the linearized unloading stiffness solves
+  // with) against central differences, on every row the contact writes.
+  std::vector<double> row_force;
+  for (int row : contact->row_equations()) row_force.push_back(force[static_cast<std::size_t>(row)]);
+  std::vector<double> at_plus = force, at_minus = force, d_alpha(n, 0.0);
+  const double h = 1e-6 * alpha;
+  contact->write_residual_rows(u.data(), alpha + h, row_force.data(), at_plus.data());
+  contact->write_residual_rows(u.data(), alpha - h, row_force.data(), at_minus.data());
+  contact->write_depth_derivative_rows(u.data(), alpha, row_force.data(), d_alpha.data());
+  for (int row : contact->row_equations()) {
+    const auto i = static_cast<std::size_t>(row);
+    EXPECT_NEAR((at_plus[i] - at_minus[i]) / (2.0 * h), d_alpha[i], 1e-6 * scale / alpha) << "depth row " << row;
+  }
   if (inspect) inspect(*contact, u, force, alpha);
 }
 

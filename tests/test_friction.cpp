@@ -109,6 +109,19 @@ TEST(CoulombFriction, TheJacobianRowsAreTheResidualsDerivative) {
         EXPECT_NEAR((f_plus[equation] - f_minus[equation]) / (2.0 * step), jd[equation], 1e-6 * scale)
             << "candidate at x = " << c.x << (equation == c.equation ? ", vertical row" : ", horizontal row");
       }
+    // The rows' derivative in the depth at fixed u (a slip row's cone moves with the penetration)
+    // against central differences.
+    std::vector<double> row_force, at_plus = bulk, at_minus = bulk, d_alpha(n, 0.0);
+    for (int row : contact.row_equations()) row_force.push_back(bulk[static_cast<std::size_t>(row)]);
+    const double h = 1e-6 * alpha;
+    contact.write_residual_rows(u.data(), alpha + h, row_force.data(), at_plus.data());
+    contact.write_residual_rows(u.data(), alpha - h, row_force.data(), at_minus.data());
+    contact.write_depth_derivative_rows(u.data(), alpha, row_force.data(), d_alpha.data());
+    for (int row : contact.row_equations()) {
+      const auto i = static_cast<std::size_t>(row);
+      EXPECT_NEAR((at_plus[i] - at_minus[i]) / (2.0 * h), d_alpha[i], 1e-6 * std::abs(d_alpha[i]) + 1e-9 * cs.back().scale)
+          << "depth row " << row;
+    }
   }
 }
 

@@ -184,8 +184,15 @@ void CoulombNodeToRigidContact::write_depth_derivative_rows(const double* u, dou
                                                             double* df) const {
   const auto& cs = candidates();
   for (std::size_t k = 0; k < cs.size(); ++k) {
-    if (cs[k].tangential_equation >= 0) df[cs[k].tangential_equation] = 0.0;
     df[cs[k].equation] = NodeToRigidContact::active(cs[k], row_force[k], u[cs[k].equation], alpha) ? cs[k].scale : 0.0;
+    const int row = tangential_row_[k];
+    if (row < 0) continue;
+    // A slip row's l = c pen - r moves with alpha through pen.
+    switch (branch(k, u, alpha, row_force[k], row_force[row])) {
+      case Branch::slip_positive: df[cs[k].tangential_equation] = -mu_ * cs[k].scale; break;
+      case Branch::slip_negative: df[cs[k].tangential_equation] = mu_ * cs[k].scale; break;
+      default: df[cs[k].tangential_equation] = 0.0; break;
+    }
   }
 }
 

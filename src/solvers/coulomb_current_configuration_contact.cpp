@@ -270,7 +270,7 @@ ContactResult CoulombCurrentConfigurationContact::evaluate(const double* u, cons
     r.outermost = static_cast<int>(k);
     if (tangential_row_[k] < 0) continue;
     r.tangential_force[k] = s.q * std::sqrt(s.weight);
-    r.sliding[k] = !sticking() && std::abs(s.q) >= (1.0 - slip_report_tolerance) * mu_ * s.lambda;
+    r.sliding[k] = !sticking() && s.lambda > 0.0 && std::abs(s.q) >= (1.0 - slip_report_tolerance) * mu_ * s.lambda;
   }
   r.force = symmetry_factor() * half_model_force;
   r.half_width = half_width(u, alpha, r);

@@ -67,8 +67,10 @@ double linearized_unloading_stiffness(const StiffnessPattern& pattern, const std
 }
 
 // Rows that carry history (friction): the one-sided derivative of an increment from the state to
-// alpha - delta on the elastic unloading operator, r(u + w) = r(u) + K w.  Its equations are
-// piecewise linear in w, so semi-smooth Newton reaches their exact solution in a few steps: it
+// alpha - delta on the unloading operator T (K, or finite strain's tangent): r(u + w) = r(u) + T w
+// on the contact nodes' rows, T w elsewhere.  Its equations are piecewise linear in w (up to the
+// current surface's O(delta^2) in finite strain), so semi-smooth Newton reaches their solution in
+// a few steps: it
 // stops when the branches at the new w are those the step was solved with.  On a fixed set of
 // branches w is proportional to delta, so S = f sum_k (K w)_k / delta, without a difference of
 // forces.  The sum runs over the nodes in contact at the state or after the increment: a contact

@@ -31,7 +31,7 @@ DeformationGradient identity_deformation();
 /// A deformation gradient F = I + H held with its displacement gradient H (in F's components), of
 /// which the strains are computed: F rounds a strain to 1e-16 absolute, H keeps its relative
 /// precision.  A coarse element far from the punch strains by 1e-9 and less, and that rounding,
-/// times its stiffness, made a residual above Newton's tolerance (docs/MODEL.md §12.3).
+/// times its stiffness, made a residual above Newton's tolerance (docs/MODEL.md §12.2, §12.4).
 class Deformation {
 public:
   /// No deformation: F = I.

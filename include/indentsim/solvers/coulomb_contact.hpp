@@ -51,7 +51,8 @@ public:
   void write_parameter_derivative_rows(const double* u, double alpha, const double* row_force,
                                        const double* d_row_force, double d_log_stiffness,
                                        double* df) const override;
-  /// The normal rows' c_k on active rows; the tangential rows do not depend on alpha.
+  /// The normal rows' c_k on active rows; a slip row's -s mu c_k (its cone's radius moves with
+  /// the penetration), the other tangential rows 0.
   void write_depth_derivative_rows(const double* u, double alpha, const double* row_force, double* df) const override;
   /// Sticking rows pin unknowns; sliding ones combine two stiffness rows.
   bool rows_pin_unknowns() const override { return sticking(); }
