@@ -80,6 +80,8 @@ bool ContactEquations::pivot_reference(double* values) {
 constexpr double chord_contraction = 1e-2;
 // Residual norms kept per solve (diagnostics and the convergence tests need the first few).
 constexpr std::size_t max_residual_history = 10000;
+// The step tolerance as a share of the residual tolerance (see Impl's constructor).
+constexpr double step_tolerance_share = 1e-3;
 // GMRES's Krylov space per Newton iteration (no restarts): with a preconditioner from the same
 // solve it converges in a few iterations; one that needs more is stale and is refreshed.
 constexpr int krylov_dimension = 15;
@@ -159,8 +161,13 @@ struct NewtonSolver::Impl {
     }
     sundials::check(KINSetNumMaxIters(kinsol, settings.max_iterations), "KINSetNumMaxIters");
     sundials::check(KINSetFuncNormTol(kinsol, settings.tolerance), "KINSetFuncNormTol");
-    // Convergence is judged on the residual only: a tiny step is not success.
-    sundials::check(KINSetScaledStepTol(kinsol, 1e-300), "KINSetScaledStepTol");
+    // Convergence is judged on the residual only (solve() re-checks it: a tiny step is not
+    // success), but a step below step_tolerance_share of the residual tolerance (in displacement
+    // over its scale) cannot change a scaled residual by more than about that share of its
+    // tolerance: the iteration has stagnated.  The same bound is the line search's shortest
+    // step, lambda >= steptol / |p|: without it a search at a kink of the contact set halves
+    // lambda down to 1e-300, about a thousand residuals for one Newton iteration.
+    sundials::check(KINSetScaledStepTol(kinsol, step_tolerance_share * settings.tolerance), "KINSetScaledStepTol");
     // The predictor can be far from the solution in scaled units (first increment from u = 0):
     // KINSOL's default step bound would stop it (docs/DESIGN.md §15), so allow any step.
     sundials::check(KINSetMaxNewtonStep(kinsol, 1e30), "KINSetMaxNewtonStep");
