@@ -669,7 +669,9 @@ TEST_F(FitCli, ADenseCurveIsFittedAtThePointsTheModelResolvesAndSaysSo) {
     dense.emplace_back(a, (1.0 - t) * curve[k - 1].second + t * curve[k].second);
   }
   const std::string data = write_curve("dense.csv", dense);
-  ASSERT_EQ(cli(fit_of(data, "--set material.e0=0.0026 --out " + (dir_ / "dense").string()), "timeout 120"), 0)
+  // The reduction is asserted by the note below; the timeout only ends a run that hangs (under the
+  // sanitizers on a loaded 2-core machine this fit took over 120 s).
+  ASSERT_EQ(cli(fit_of(data, "--set material.e0=0.0026 --out " + (dir_ / "dense").string()), "timeout 600"), 0)
       << err();
   EXPECT_NE(out().find("note: " + data + ": 2000 rows fitted as "), std::string::npos) << out();
   const auto j = fit_json("dense");
