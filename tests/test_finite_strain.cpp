@@ -7,6 +7,7 @@
 #include <random>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <gtest/gtest.h>
 
 #include "indentsim/materials/finite_strain.hpp"
@@ -46,13 +47,21 @@ Eigen::Matrix<double, Rows, 5> finite_differences(const Of& of, const Deformatio
   return fd;
 }
 
-std::unique_ptr<FiniteStrainPointLaw> hencky_elastic() { return std::make_unique<HenckyPointLaw>(steel, nullptr); }
-std::unique_ptr<FiniteStrainPointLaw> hencky_ilyushin() {
-  return std::make_unique<HenckyPointLaw>(
-      steel, std::make_unique<IlyushinPointLaw>(IlyushinLaw(steel, 0.003, HardeningLaw::power, 0.9, 0.2), false, 1));
+/// Both readings of the elastic law's D : e at large strain (docs/MODEL.md §12.2).
+constexpr ElasticStressMeasure measures[] = {ElasticStressMeasure::cauchy, ElasticStressMeasure::kirchhoff};
+std::string name_of(ElasticStressMeasure m) { return m == ElasticStressMeasure::cauchy ? "cauchy" : "kirchhoff"; }
+
+std::unique_ptr<FiniteStrainPointLaw> hencky_elastic(ElasticStressMeasure m = ElasticStressMeasure::cauchy) {
+  return std::make_unique<HenckyPointLaw>(steel, nullptr, m);
 }
-std::unique_ptr<J2LogStrainPointLaw> j2_log(double n = 0.2) {
-  return std::make_unique<J2LogStrainPointLaw>(J2Law(steel, std::make_shared<PowerLawHardening>(400e6, steel.E, n)), 1);
+std::unique_ptr<FiniteStrainPointLaw> hencky_ilyushin(ElasticStressMeasure m = ElasticStressMeasure::cauchy) {
+  return std::make_unique<HenckyPointLaw>(
+      steel, std::make_unique<IlyushinPointLaw>(IlyushinLaw(steel, 0.003, HardeningLaw::power, 0.9, 0.2), false, 1), m);
+}
+std::unique_ptr<J2LogStrainPointLaw> j2_log(double n = 0.2, ElasticStressMeasure m = ElasticStressMeasure::cauchy,
+                                            std::size_t points = 1) {
+  return std::make_unique<J2LogStrainPointLaw>(J2Law(steel, std::make_shared<PowerLawHardening>(400e6, steel.E, n)),
+                                               points, m);
 }
 
 }  // namespace
@@ -69,14 +78,15 @@ TEST(FiniteStrain, TheLogarithmicStrainOfAStretchIsTheLogOfItsStretches) {
 }
 
 TEST(FiniteStrain, ARigidRotationStrainsAndStressesNothing) {
-  for (const double theta : {1e-3, 0.5, std::acos(-1.0) / 2, 2.5}) {
-    SCOPED_TRACE(theta);
-    const DeformationGradient R = rotated_stretch(theta, 1, 1, 1);
-    EXPECT_LE(logarithmic_strain(R, identity_tensor()).strain.norm(), 1e-15);
-    EXPECT_LE(hencky_elastic()->respond(0, R).nominal.norm(), 1e-15 * steel.E);
-    EXPECT_LE(hencky_ilyushin()->respond(0, R).nominal.norm(), 1e-15 * steel.E);
-    EXPECT_LE(j2_log()->respond(0, R).nominal.norm(), 1e-15 * steel.E);
-  }
+  for (const double theta : {1e-3, 0.5, std::acos(-1.0) / 2, 2.5})
+    for (const ElasticStressMeasure m : measures) {
+      SCOPED_TRACE(fmt::format("{} {}", theta, name_of(m)));
+      const DeformationGradient R = rotated_stretch(theta, 1, 1, 1);
+      EXPECT_LE(logarithmic_strain(R, identity_tensor()).strain.norm(), 1e-15);
+      EXPECT_LE(hencky_elastic(m)->respond(0, R).nominal.norm(), 1e-15 * steel.E);
+      EXPECT_LE(hencky_ilyushin(m)->respond(0, R).nominal.norm(), 1e-15 * steel.E);
+      EXPECT_LE(j2_log(0.2, m)->respond(0, R).nominal.norm(), 1e-15 * steel.E);
+    }
 }
 
 TEST(FiniteStrain, ARotatedStretchHasTheRotatedStrainAndStress) {
@@ -92,10 +102,13 @@ TEST(FiniteStrain, ARotatedStretchHasTheRotatedStrainAndStress) {
   const DeformationGradient U = gradient(1.3, 0, 0, 0.8, 1.0), RU = rotated_stretch(theta, 1.3, 0.8, 1.0);
   const VoigtVector e_u = logarithmic_strain(U, identity_tensor()).strain;
   EXPECT_LE((logarithmic_strain(RU, identity_tensor()).strain - rotate(e_u, true)).norm(), 1e-14);
-  const auto law = j2_log();
-  const FiniteStrainResponse stretched = law->respond(0, U), turned = law->respond(0, RU);
-  EXPECT_TRUE(stretched.plastic);
-  EXPECT_LE((turned.kirchhoff - rotate(stretched.kirchhoff, false)).norm(), 1e-12 * stretched.kirchhoff.norm());
+  for (const ElasticStressMeasure m : measures) {
+    SCOPED_TRACE(name_of(m));
+    const auto law = j2_log(0.2, m);
+    const FiniteStrainResponse stretched = law->respond(0, U), turned = law->respond(0, RU);
+    EXPECT_TRUE(stretched.plastic);
+    EXPECT_LE((turned.kirchhoff - rotate(stretched.kirchhoff, false)).norm(), 1e-12 * stretched.kirchhoff.norm());
+  }
 }
 
 TEST(FiniteStrain, TheLogarithmicStrainsDerivativeMatchesCentralDifferences) {
@@ -118,12 +131,15 @@ TEST(FiniteStrain, TheNominalTangentMatchesCentralDifferencesForEachLaw) {
   for (int trial = 0; trial < 20; ++trial) {
     const DeformationGradient F = random_gradient(rng, trial < 10 ? 0.01 : 0.3);
     std::vector<std::pair<std::string, std::unique_ptr<FiniteStrainPointLaw>>> laws;
-    laws.emplace_back("hencky elastic", hencky_elastic());
-    laws.emplace_back("hencky ilyushin", hencky_ilyushin());
-    // J2 from a plastic history (a first stretch committed), then another gradient.
-    auto j2 = j2_log();
-    j2->commit(0, random_gradient(rng, 0.2));
-    laws.emplace_back("j2 log strain", std::move(j2));
+    const DeformationGradient history = random_gradient(rng, 0.2);
+    for (const ElasticStressMeasure m : measures) {
+      laws.emplace_back("hencky elastic " + name_of(m), hencky_elastic(m));
+      laws.emplace_back("hencky ilyushin " + name_of(m), hencky_ilyushin(m));
+      // J2 from a plastic history (a first stretch committed), then another gradient.
+      auto j2 = j2_log(0.2, m);
+      j2->commit(0, history);
+      laws.emplace_back("j2 log strain " + name_of(m), std::move(j2));
+    }
     for (const auto& [name, law] : laws) {
       SCOPED_TRACE(name);
       const FiniteStrainResponse r = law->respond(0, F);
@@ -139,51 +155,96 @@ TEST(FiniteStrain, SmallDeformationsGiveTheSmallStrainStress) {
   // F = I + t H: P = sigma(sym H t) + O(t^2), so the relative difference falls as t.
   const Eigen::Matrix<double, 5, 1> h = (Eigen::Matrix<double, 5, 1>() << 0.3, -0.5, 0.2, -0.4, 0.1).finished();
   const ConstitutiveMatrix d = steel.stiffness();
-  double previous = 1.0;
-  for (const double t : {1e-3, 1e-4, 1e-5}) {
-    const DeformationGradient F = identity_deformation() + t * h;
-    const VoigtVector small_strain(t * h[0], t * h[3], t * (h[1] + h[2]), t * h[4]);
-    const VoigtVector sigma = d * small_strain;
-    const NominalStress p = hencky_elastic()->respond(0, F).nominal;
-    // P's 12 and 21 both tend to sigma12.
-    const Eigen::Matrix<double, 5, 1> expected =
-        (Eigen::Matrix<double, 5, 1>() << sigma[0], sigma[2], sigma[2], sigma[1], sigma[3]).finished();
-    const double relative = (p - expected).norm() / expected.norm();
-    EXPECT_LE(relative, 3.0 * t);
-    EXPECT_LT(relative, 0.2 * previous);
-    previous = relative;
+  for (const ElasticStressMeasure m : measures) {
+    SCOPED_TRACE(name_of(m));
+    double previous = 1.0;
+    for (const double t : {1e-3, 1e-4, 1e-5}) {
+      const DeformationGradient F = identity_deformation() + t * h;
+      const VoigtVector small_strain(t * h[0], t * h[3], t * (h[1] + h[2]), t * h[4]);
+      const VoigtVector sigma = d * small_strain;
+      const NominalStress p = hencky_elastic(m)->respond(0, F).nominal;
+      // P's 12 and 21 both tend to sigma12.
+      const Eigen::Matrix<double, 5, 1> expected =
+          (Eigen::Matrix<double, 5, 1>() << sigma[0], sigma[2], sigma[2], sigma[1], sigma[3]).finished();
+      const double relative = (p - expected).norm() / expected.norm();
+      EXPECT_LE(relative, 3.0 * t);
+      EXPECT_LT(relative, 0.2 * previous);
+      previous = relative;
+    }
   }
 }
 
 TEST(FiniteStrain, J2UnderAFiniteUniaxialStretchFollowsItsFlowCurveInLogStrain) {
-  // Uniaxial Kirchhoff stress along 2 (P11 = P33 = 0 by lateral stretches): the log strain is
-  // additive, ln(stretch) = tau / E + eps_p, and tau = sigma_y(eps_p), to 1e-10, up to a stretch
-  // of 2.  The exponential map keeps det C_p = 1.
-  for (const double n : {0.0, 0.2}) {
-    SCOPED_TRACE(n);
-    const auto law = j2_log(n);
-    const PowerLawHardening curve(400e6, steel.E, n);
-    double lateral = 1.0;
-    for (int step = 1; step <= 40; ++step) {
-      const double stretch = std::exp(std::log(2.0) * step / 40.0);
-      FiniteStrainResponse r;
-      for (int iteration = 0; iteration < 50; ++iteration) {
+  // Uniaxial stress along 2 (P11 = P33 = 0 by lateral stretches): the log strain is additive,
+  // ln(stretch) = s / E + eps_p, and s = sigma_y(eps_p), to 1e-10, up to a stretch of 2, with s
+  // the measure's stress: the Cauchy stress tau / J or the Kirchhoff stress tau.  The exponential
+  // map keeps det C_p = 1.
+  for (const ElasticStressMeasure m : measures)
+    for (const double n : {0.0, 0.2}) {
+      SCOPED_TRACE(fmt::format("{} n = {}", name_of(m), n));
+      const auto law = j2_log(n, m);
+      const PowerLawHardening curve(400e6, steel.E, n);
+      double lateral = 1.0;
+      int plastic_steps = 0;
+      for (int step = 1; step <= 40; ++step) {
+        const double stretch = std::exp(std::log(2.0) * step / 40.0);
+        FiniteStrainResponse r;
+        for (int iteration = 0; iteration < 50; ++iteration) {
+          const DeformationGradient F = gradient(lateral, 0, 0, stretch, lateral);
+          r = law->respond(0, F);
+          if (std::abs(r.nominal[0]) <= 1e-12 * std::abs(r.nominal[3])) break;
+          lateral -= r.nominal[0] / (r.tangent(0, 0) + r.tangent(0, 4));  // P11 = P33 by symmetry
+        }
         const DeformationGradient F = gradient(lateral, 0, 0, stretch, lateral);
-        r = law->respond(0, F);
-        if (std::abs(r.nominal[0]) <= 1e-12 * std::abs(r.nominal[3])) break;
-        lateral -= r.nominal[0] / (r.tangent(0, 0) + r.tangent(0, 4));  // P11 = P33 by symmetry
+        law->commit(0, F);
+        const double eps_p = law->state(0).equivalent_plastic_strain;
+        const double J = lateral * lateral * stretch;
+        const double s = m == ElasticStressMeasure::cauchy ? r.kirchhoff[1] / J : r.kirchhoff[1];
+        if (eps_p == 0.0) continue;
+        ++plastic_steps;
+        EXPECT_NEAR(s, curve.flow_stress(eps_p), 1e-10 * s) << "step " << step;
+        EXPECT_NEAR(std::log(stretch), s / steel.E + eps_p, 1e-10) << "step " << step;
+        const SymmetricTensor& g = law->state(0).inverse_plastic_metric;
+        EXPECT_NEAR((g[0] * g[1] - g[2] * g[2]) * g[3], 1.0, 1e-12);
       }
-      const DeformationGradient F = gradient(lateral, 0, 0, stretch, lateral);
-      law->commit(0, F);
-      const double eps_p = law->state(0).equivalent_plastic_strain;
-      const double tau = r.kirchhoff[1];
-      if (eps_p == 0.0) continue;
-      EXPECT_NEAR(tau, curve.flow_stress(eps_p), 1e-10 * tau) << "step " << step;
-      EXPECT_NEAR(std::log(stretch), tau / steel.E + eps_p, 1e-10) << "step " << step;
-      const SymmetricTensor& g = law->state(0).inverse_plastic_metric;
-      EXPECT_NEAR((g[0] * g[1] - g[2] * g[2]) * g[3], 1.0, 1e-12);
+      EXPECT_GE(plastic_steps, 35);
     }
-  }
+}
+
+TEST(FiniteStrain, TheElasticLawSetsTheCauchyOrTheKirchhoffStressToDTimesTheLogStrain) {
+  // Homogeneous gradients (stretches, shears, rotations, compression to J = 0.6): the Cauchy
+  // stress sigma = P F^T / J recovered from the nominal stress is D e ("cauchy", Abaqus's) or
+  // D e / J ("kirchhoff", Hencky's hyperelastic law), e the Hencky strain.  Below yield J2 is the
+  // same elastic law.
+  std::mt19937 rng(31);
+  std::vector<DeformationGradient> cases{gradient(1.3, 0, 0, 0.8, 1.0), gradient(1, 0.5, 0, 1, 1),
+                                         rotated_stretch(0.6, 0.85, 0.8, 0.88), gradient(0.9, 0.2, -0.1, 1.1, 0.95)};
+  for (int k = 0; k < 6; ++k) cases.push_back(random_gradient(rng, 0.3));
+  const ElasticMaterial soft{200e9, 0.3};
+  const auto j2_elastic = [&](ElasticStressMeasure m) {  // yields at 1e3 E: elastic throughout
+    return std::make_unique<J2LogStrainPointLaw>(J2Law(soft, std::make_shared<PowerLawHardening>(1e3 * soft.E, soft.E, 0.0)), 1, m);
+  };
+  for (const DeformationGradient& F : cases)
+    for (const ElasticStressMeasure m : measures) {
+      SCOPED_TRACE(fmt::format("{} F = {}", name_of(m), fmt::join(F.data(), F.data() + 5, " ")));
+      const VoigtVector de = soft.stiffness() * logarithmic_strain(F, identity_tensor()).strain;
+      const double J = (F[0] * F[3] - F[1] * F[2]) * F[4];
+      const VoigtVector expected = m == ElasticStressMeasure::cauchy ? de : VoigtVector(de / J);
+      std::vector<std::unique_ptr<FiniteStrainPointLaw>> laws;
+      laws.push_back(std::make_unique<HenckyPointLaw>(soft, nullptr, m));
+      laws.push_back(j2_elastic(m));
+      for (const auto& law : laws) {
+        const FiniteStrainResponse r = law->respond(0, F);
+        const NominalStress& p = r.nominal;
+        // sigma = P F^T / J in the plane (P = (P11, P12, P21, P22)), sigma33 = P33 F33 / J.
+        const double s11 = (p[0] * F[0] + p[1] * F[1]) / J, s12 = (p[0] * F[2] + p[1] * F[3]) / J;
+        const double s21 = (p[2] * F[0] + p[3] * F[1]) / J, s22 = (p[2] * F[2] + p[3] * F[3]) / J;
+        const VoigtVector sigma(s11, s22, s12, p[4] * F[4] / J);
+        EXPECT_FALSE(r.plastic);
+        EXPECT_NEAR(s12, s21, 1e-13 * expected.norm());
+        EXPECT_LE((sigma - expected).norm(), 1e-13 * expected.norm()) << sigma.transpose() << "\n" << expected.transpose();
+      }
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -241,13 +302,14 @@ TEST(FiniteStrainPatch, HomogeneousDeformationsLeaveTheInteriorNodesInEquilibriu
   const double xs[4] = {0.4, 0.7, 1.5, 1.8}, ys[4] = {-1.0, -0.6, -0.5, 0.0};
   for (const auto& c : cases) {
     for (const ElementKind kind : {ElementKind::q1, ElementKind::bbar}) {
-      for (int plastic = 0; plastic < 2; ++plastic) {
-        SCOPED_TRACE(std::string(c.name) + (kind == ElementKind::bbar ? " F-bar" : " Q1") + (plastic ? " J2" : " elastic"));
+      for (int law_kind = 0; law_kind < 4; ++law_kind) {
+        const bool plastic = law_kind % 2 == 1;
+        const ElasticStressMeasure m = measures[law_kind / 2];
+        SCOPED_TRACE(std::string(c.name) + (kind == ElementKind::bbar ? " F-bar" : " Q1") + (plastic ? " J2 " : " elastic ") +
+                     name_of(m));
         const auto kinematics = make_kinematics(c.scene);
-        std::unique_ptr<FiniteStrainPointLaw> law =
-            plastic ? std::unique_ptr<FiniteStrainPointLaw>(std::make_unique<J2LogStrainPointLaw>(
-                          J2Law(steel, std::make_shared<PowerLawHardening>(400e6, steel.E, 0.2)), 36))
-                    : hencky_elastic();
+        std::unique_ptr<FiniteStrainPointLaw> law = plastic ? std::unique_ptr<FiniteStrainPointLaw>(j2_log(0.2, m, 36))
+                                                            : hencky_elastic(m);
         const double f33 = c.scene == SceneKind::axisymmetric ? c.f(0, 0) : 1.0;
         const DeformationGradient expected = gradient(c.f(0, 0), c.f(0, 1), c.f(1, 0), c.f(1, 1), f33);
         Eigen::Matrix<double, 2, 16> nodal = Eigen::Matrix<double, 2, 16>::Zero();  // node (i, j) = 4 i + j
@@ -288,12 +350,14 @@ TEST(FiniteStrainElement, TheTangentMatchesCentralDifferencesOfTheForce) {
       for (int trial = 0; trial < 6; ++trial) {
         ElementVector ue;
         for (double& v : ue) v = 0.3 * c(rng);
-        auto j2 = std::make_unique<J2LogStrainPointLaw>(J2Law(steel, std::make_shared<PowerLawHardening>(400e6, steel.E, 0.2)), 4);
         const auto first = q.law_gradients(0.5 * ue);
-        for (std::size_t g = 0; g < 4; ++g) j2->commit(g, first[g]);
         std::vector<std::unique_ptr<FiniteStrainPointLaw>> laws;
-        laws.push_back(hencky_elastic());
-        laws.push_back(std::move(j2));
+        for (const ElasticStressMeasure m : measures) {
+          auto j2 = j2_log(0.2, m, 4);
+          for (std::size_t g = 0; g < 4; ++g) j2->commit(g, first[g]);
+          laws.push_back(hencky_elastic(m));
+          laws.push_back(std::move(j2));
+        }
         for (const auto& law : laws) {
           const ElementResponse r = respond(q, *law, ue);
           ElementMatrix fd;
@@ -329,8 +393,10 @@ TEST(FiniteStrainElement, AStrainOfOnePartInATrillionKeepsItsRelativePrecision) 
       const FiniteStrainQuadrature q = kinematics->finite_strain_quadrature(rect, kind);
       const ElementMatrix k = kinematics->elastic_stiffness(rect, steel.lame(), kind);
       std::vector<std::unique_ptr<FiniteStrainPointLaw>> laws;
-      laws.push_back(hencky_elastic());
-      laws.push_back(std::make_unique<J2LogStrainPointLaw>(J2Law(steel, std::make_shared<PowerLawHardening>(400e6, steel.E, 0.2)), 4));
+      for (const ElasticStressMeasure m : measures) {
+        laws.push_back(hencky_elastic(m));
+        laws.push_back(j2_log(0.2, m, 4));
+      }
       for (int trial = 0; trial < 4; ++trial) {
         ElementVector ue;
         for (double& v : ue) v = 1e-12 * c(rng);
@@ -367,9 +433,7 @@ TEST(FiniteStrainBulk, AUniformCompressionOfTheBlockLeavesEveryInteriorNodeInEqu
       const Mesh mesh = small_block(scene, kind);
       const StiffnessPattern pattern(mesh);
       const ElasticStiffness elastic(mesh, steel, pattern);
-      FiniteStrainBulk bulk(elastic, std::make_unique<J2LogStrainPointLaw>(
-                                         J2Law(steel, std::make_shared<PowerLawHardening>(400e6, steel.E, 0.2)),
-                                         4 * static_cast<std::size_t>(mesh.elements())));
+      FiniteStrainBulk bulk(elastic, j2_log(0.2, ElasticStressMeasure::cauchy, 4 * static_cast<std::size_t>(mesh.elements())));
       std::vector<double> u(static_cast<std::size_t>(mesh.equations()), 0.0), f(u.size());
       for (int i = 0; i < mesh.nodes_x(); ++i)
         for (int j = 0; j < mesh.nodes_y(); ++j) {
@@ -391,14 +455,16 @@ TEST(FiniteStrainBulk, TheAssembledTangentMatchesCentralDifferencesOfTheInternal
   std::mt19937 rng(29);
   std::uniform_real_distribution<double> c(-0.05, 0.05);
   for (const SceneKind scene : {SceneKind::plane_strain, SceneKind::axisymmetric})
-    for (const ElementKind kind : {ElementKind::q1, ElementKind::bbar}) {
+    for (const ElementKind kind : {ElementKind::q1, ElementKind::bbar})
+      for (const ElasticStressMeasure m : measures) {
       SCOPED_TRACE(std::string(scene == SceneKind::axisymmetric ? "axisymmetric" : "plane strain") +
-                   (kind == ElementKind::bbar ? " F-bar" : " Q1"));
+                   (kind == ElementKind::bbar ? " F-bar " : " Q1 ") + name_of(m));
       const Mesh mesh = small_block(scene, kind);
       const StiffnessPattern pattern(mesh);
       const ElasticStiffness elastic(mesh, steel, pattern);
-      FiniteStrainBulk bulk(elastic, std::make_unique<HenckyPointLaw>(steel, nullptr));
-      EXPECT_EQ(bulk.symmetric_tangent(), kind == ElementKind::q1);
+      FiniteStrainBulk bulk(elastic, hencky_elastic(m));
+      // Unsymmetric: F-bar's dJbar/du, and the Cauchy measure's J s m^T.
+      EXPECT_EQ(bulk.symmetric_tangent(), kind == ElementKind::q1 && m == ElasticStressMeasure::kirchhoff);
       const std::size_t n = static_cast<std::size_t>(mesh.equations());
       std::vector<double> u(n), values(static_cast<std::size_t>(pattern.nonzeros()));
       for (double& v : u) v = c(rng);
@@ -455,7 +521,7 @@ void expect_jacobian_rows_are_the_residuals_derivative(
   const StiffnessPattern pattern(mesh);
   const ElasticMaterial material{lc.material.E, lc.material.nu};
   ElasticStiffness k(mesh, material, pattern);
-  FiniteStrainBulk bulk(k, std::make_unique<HenckyPointLaw>(material, nullptr));
+  FiniteStrainBulk bulk(k, std::make_unique<HenckyPointLaw>(material, nullptr, ElasticStressMeasure::cauchy));
   const CurrentConfigurationContact surface(mesh, make_punch(lc.punch), pattern, k.values());
   const auto& cs = surface.candidates();
   ASSERT_GE(cs.size(), 12u);

@@ -431,6 +431,21 @@ const std::vector<KeyDeclaration>& key_declarations() {
       k.push_back(extension);
     }
     {
+      KeyDeclaration measure = choice_key(
+          {"material", "elastic_stress", "choice", "", "",
+           "finite strain: the stress the elastic law's D : e sets, e the logarithmic elastic strain: cauchy "
+           "(the true stress, as Abaqus's elasticity with NLGEOM and the field's reference simulations) or kirchhoff "
+           "(tau = J sigma, Hencky's hyperelastic law); small strain refuses it"},
+          elastic_stress_names, [](auto& c) -> auto& { return c.material.elastic_stress; });
+      const auto write = measure.write;
+      measure.write = [write](const LoadCase& lc) -> std::optional<std::string> {
+        if (lc.geometry.strain == StrainChoice::small) return std::nullopt;
+        return write(lc);
+      };
+      measure.default_words = "cauchy";
+      k.push_back(measure);
+    }
+    {
       const auto path = [](auto& c) -> auto& { return c.load.path; };
       KeyDeclaration d = numbers_key({"load", "path", "array of numbers", "from 0, each >= 0", "m",
                                       "depth waypoints h, piecewise linear; may go down (unload, separate) and up again",

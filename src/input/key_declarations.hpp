@@ -37,6 +37,8 @@ inline constexpr Choice<HardeningLaw> hardening_names[] = {
     {"table", HardeningLaw::table}};
 inline constexpr Choice<TableExtension> table_extension_names[] = {{"flat", TableExtension::flat},
                                                                    {"last_slope", TableExtension::last_slope}};
+inline constexpr Choice<ElasticStressMeasure> elastic_stress_names[] = {{"cauchy", ElasticStressMeasure::cauchy},
+                                                                       {"kirchhoff", ElasticStressMeasure::kirchhoff}};
 inline constexpr Choice<ElementChoice> element_names[] = {
     {"auto", ElementChoice::automatic}, {"q1", ElementChoice::q1}, {"bbar", ElementChoice::bbar}};
 inline constexpr Choice<LinearSolverChoice> linear_names[] = {

@@ -42,6 +42,7 @@ void LoadInput::multiply_increments(int factor) {
 std::string to_string(MaterialModel model) { return name_of(model_names, model); }
 std::string to_string(HardeningLaw law) { return name_of(hardening_names, law); }
 std::string to_string(TableExtension extension) { return name_of(table_extension_names, extension); }
+std::string to_string(ElasticStressMeasure measure) { return name_of(elastic_stress_names, measure); }
 std::string to_string(SceneKind kind) { return name_of(scene_names, kind); }
 std::string to_string(StrainChoice strain) { return name_of(strain_names, strain); }
 std::string to_string(PunchShapeKind shape) { return name_of(shape_names, shape); }
@@ -206,6 +207,10 @@ LoadCase from_table(const toml::table& root, const std::string& source, const st
   LoadCase lc;
   lc.source = source;
   for (const auto& key : keys) key.read(r, lc);
+  // Small strain cannot tell the Cauchy from the Kirchhoff stress (docs/MODEL.md §12.2).
+  if (lc.geometry.strain == StrainChoice::small && r.find("material", "elastic_stress"))
+    r.fail("material.elastic_stress", "applies to finite strain only (geometry.strain = \"finite\" or \"auto\"); "
+                                      "in small strain the Cauchy and the Kirchhoff stress coincide");
   // e0 or the uniaxial yield stress: exactly one may be given; the law works with e0.
   if (r.find("material", "yield_stress")) {
     if (r.find("material", "e0"))

@@ -162,4 +162,14 @@ NominalResponse nominal_response(const DeformationGradient& F, const VoigtVector
   return r;
 }
 
+void express_in_kirchhoff_stress(ElasticStressMeasure measure, const VoigtVector& strain, VoigtVector& stress,
+                                 ConstitutiveMatrix& tangent) {
+  if (measure == ElasticStressMeasure::kirchhoff) return;
+  // tau = J sigma with J = exp(e11 + e22 + e33): dJ/de = J m.
+  const double J = std::exp(strain[0] + strain[1] + strain[3]);
+  const VoigtVector m(1.0, 1.0, 0.0, 1.0);
+  tangent = J * (tangent + stress * m.transpose());
+  stress *= J;
+}
+
 }  // namespace indentsim

@@ -4,8 +4,9 @@
 
 namespace indentsim {
 
-HenckyPointLaw::HenckyPointLaw(const ElasticMaterial& elastic, std::unique_ptr<PointLaw> law)
-    : elastic_(elastic.stiffness()), law_(std::move(law)) {}
+HenckyPointLaw::HenckyPointLaw(const ElasticMaterial& elastic, std::unique_ptr<PointLaw> law,
+                               ElasticStressMeasure measure)
+    : elastic_(elastic.stiffness()), law_(std::move(law)), measure_(measure) {}
 
 FiniteStrainResponse HenckyPointLaw::respond(std::size_t point, const Deformation& F) const {
   const LogarithmicStrain e = logarithmic_strain(F, identity_tensor());
@@ -19,6 +20,7 @@ FiniteStrainResponse HenckyPointLaw::respond(std::size_t point, const Deformatio
   } else {
     r.kirchhoff = elastic_ * e.strain;
   }
+  express_in_kirchhoff_stress(measure_, e.strain, r.kirchhoff, d);
   const NominalResponse p = nominal_response(F.F(), r.kirchhoff, d, e.derivative);
   r.nominal = p.stress;
   r.tangent = p.tangent;
@@ -27,8 +29,10 @@ FiniteStrainResponse HenckyPointLaw::respond(std::size_t point, const Deformatio
 
 NominalTangent HenckyPointLaw::unloading_tangent(std::size_t point, const Deformation& F) const {
   const LogarithmicStrain e = logarithmic_strain(F, identity_tensor());
-  const VoigtVector tau = law_ ? law_->respond(point, e.strain).stress : VoigtVector(elastic_ * e.strain);
-  return nominal_response(F.F(), tau, elastic_, e.derivative).tangent;
+  VoigtVector tau = law_ ? law_->respond(point, e.strain).stress : VoigtVector(elastic_ * e.strain);
+  ConstitutiveMatrix d = elastic_;
+  express_in_kirchhoff_stress(measure_, e.strain, tau, d);
+  return nominal_response(F.F(), tau, d, e.derivative).tangent;
 }
 
 void HenckyPointLaw::commit(std::size_t point, const Deformation& F) {
@@ -41,7 +45,8 @@ void HenckyPointLaw::restore(const std::vector<double>& history) {
 }
 
 // ---------------------------------------------------------------------------------------------
-J2LogStrainPointLaw::J2LogStrainPointLaw(const J2Law& law, std::size_t points) : law_(law), state_(points) {}
+J2LogStrainPointLaw::J2LogStrainPointLaw(const J2Law& law, std::size_t points, ElasticStressMeasure measure)
+    : law_(law), state_(points), measure_(measure) {}
 
 FiniteStrainResponse J2LogStrainPointLaw::respond(const Deformation& F, const J2FiniteState& old,
                                                   J2FiniteState* updated) const {
@@ -54,7 +59,10 @@ FiniteStrainResponse J2LogStrainPointLaw::respond(const Deformation& F, const J2
   FiniteStrainResponse r;
   r.kirchhoff = j.stress;
   r.plastic = j.plastic;
-  const NominalResponse p = nominal_response(F.F(), j.stress, j.tangent, trial.derivative);
+  // J = e^{tr e^tr} = det F (det C_p = 1): the return map is the measure's, tau follows.
+  ConstitutiveMatrix d = j.tangent;
+  express_in_kirchhoff_stress(measure_, trial.strain, r.kirchhoff, d);
+  const NominalResponse p = nominal_response(F.F(), r.kirchhoff, d, trial.derivative);
   r.nominal = p.stress;
   r.tangent = p.tangent;
   if (updated) {
@@ -76,7 +84,10 @@ NominalTangent J2LogStrainPointLaw::unloading_tangent(std::size_t point, const D
   const LogarithmicStrain trial = logarithmic_strain(F, state_[point].inverse_plastic_metric);
   J2State small;
   small.equivalent_plastic_strain = state_[point].equivalent_plastic_strain;
-  return nominal_response(F.F(), law_.respond(trial.strain, small).stress, law_.elastic_stiffness(), trial.derivative).tangent;
+  VoigtVector tau = law_.respond(trial.strain, small).stress;
+  ConstitutiveMatrix d = law_.elastic_stiffness();
+  express_in_kirchhoff_stress(measure_, trial.strain, tau, d);
+  return nominal_response(F.F(), tau, d, trial.derivative).tangent;
 }
 
 void J2LogStrainPointLaw::commit(std::size_t point, const Deformation& F) {

@@ -86,12 +86,13 @@ void Simulation::build(const RunConfiguration& configuration, const std::optiona
     // contact on the current surface -- every run, elastic ones too.
     std::unique_ptr<FiniteStrainPointLaw> finite_law;
     if (m.model == MaterialModel::j2)
-      finite_law = std::make_unique<J2LogStrainPointLaw>(J2Law(material, make_hardening_curve(m)), points);
+      finite_law =
+          std::make_unique<J2LogStrainPointLaw>(J2Law(material, make_hardening_curve(m)), points, m.elastic_stress);
     else if (m.model == MaterialModel::ilyushin)
       finite_law = std::make_unique<HenckyPointLaw>(
-          material, std::make_unique<IlyushinPointLaw>(*law, unloads(load_case_.load.path), points));
+          material, std::make_unique<IlyushinPointLaw>(*law, unloads(load_case_.load.path), points), m.elastic_stress);
     else
-      finite_law = std::make_unique<HenckyPointLaw>(material, nullptr);
+      finite_law = std::make_unique<HenckyPointLaw>(material, nullptr, m.elastic_stress);
     plastic_ = std::make_unique<FiniteStrainBulk>(*stiffness_, std::move(finite_law));
     bulk_ = plastic_.get();
   } else if (m.model != MaterialModel::elastic) {

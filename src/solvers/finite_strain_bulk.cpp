@@ -17,7 +17,9 @@ FiniteStrainBulk::FiniteStrainBulk(const ElasticStiffness& elastic, std::unique_
     quadrature_by_class_.push_back(mesh_.kinematics().finite_strain_quadrature(rect, mesh_.element_kind()));
 }
 
-bool FiniteStrainBulk::symmetric_tangent() const { return mesh_.element_kind() != ElementKind::bbar; }
+bool FiniteStrainBulk::symmetric_tangent() const {
+  return mesh_.element_kind() != ElementKind::bbar && law_->symmetric_tangent();
+}
 
 FiniteStrainBulk::KeptResponse FiniteStrainBulk::respond(int ei, int ej, const ElementVector& ue) const {
   KeptResponse r;

@@ -47,6 +47,9 @@ enum class MaterialModel { elastic, ilyushin, j2 };
 enum class HardeningLaw { linear, power, power_law, ludwik, swift, voce, table };
 /// Beyond a hardening table's last point: flat (perfectly plastic) or along the last segment's slope.
 enum class TableExtension { flat, last_slope };
+/// The stress that the elastic law's D : e sets in finite strain (docs/MODEL.md §12.2): the
+/// Cauchy stress (Abaqus's) or the Kirchhoff stress (Hencky's hyperelastic law).
+enum class ElasticStressMeasure { cauchy, kirchhoff };
 
 struct MaterialInput {
   MaterialModel model = MaterialModel::elastic;
@@ -66,6 +69,7 @@ struct MaterialInput {
   std::string hardening_table_file;  ///< table: the CSV file it was read from, as given ("" when inline)
   std::vector<std::pair<double, double>> hardening_points;  ///< table: points (eps_p, sigma [Pa])
   TableExtension table_extension = TableExtension::flat;
+  ElasticStressMeasure elastic_stress = ElasticStressMeasure::cauchy;  ///< finite strain only
 
   /// The law is a flow-stress curve of J2 flow theory only (not an Ilyushin omega).
   bool flow_stress_law() const { return hardening != HardeningLaw::linear && hardening != HardeningLaw::power; }
@@ -268,5 +272,6 @@ std::string to_string(StrainChoice strain);
 std::string to_string(PunchShapeKind shape);
 std::string to_string(HardeningLaw law);
 std::string to_string(TableExtension extension);
+std::string to_string(ElasticStressMeasure measure);
 
 }  // namespace indentsim

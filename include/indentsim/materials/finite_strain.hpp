@@ -77,6 +77,13 @@ struct NominalResponse {
 NominalResponse nominal_response(const DeformationGradient& F, const VoigtVector& kirchhoff,
                                  const ConstitutiveMatrix& tangent, const StrainGradient& strain_derivative);
 
+/// The Kirchhoff stress, and its tangent on the logarithmic strain e, of a law that gives the
+/// stress s(e) of `measure` with tangent ds/de (docs/MODEL.md §12.2): tau = s for the Kirchhoff
+/// stress; for the Cauchy stress tau = J s, J = e^{tr e}, d tau / d e = J (ds/de + s m^T) with
+/// m = d tr e / d e = (1, 1, 0, 1).  `stress` and `tangent` are replaced by tau and d tau / d e.
+void express_in_kirchhoff_stress(ElasticStressMeasure measure, const VoigtVector& strain, VoigtVector& stress,
+                                 ConstitutiveMatrix& tangent);
+
 /// J = det F.
 double jacobian(const DeformationGradient& F);
 /// J - 1, as precise as H.

@@ -7,6 +7,8 @@
 //                        secant law (with its unloading theorem, in Hencky strains);
 //   J2LogStrainPointLaw  J2 flow theory in the multiplicative split F = F_e F_p: the radial
 //                        return of J2Law on the trial elastic strain 1/2 ln(F C_p^-1 F^T).
+// Both take the small-strain law's stress as the Cauchy or the Kirchhoff stress, as the
+// ElasticStressMeasure says (MODEL.md §12.2).
 #include <cstddef>
 #include <memory>
 #include <optional>
@@ -44,15 +46,18 @@ public:
   /// The carried state of every point, flattened, and its restoration (checkpoints).
   virtual std::vector<double> history() const = 0;
   virtual void restore(const std::vector<double>& history) = 0;
+  /// dP/dF is symmetric (a strain energy's second derivative and associative flow): not with the
+  /// Cauchy stress measure, whose tau = J s adds J s m^T.
+  virtual bool symmetric_tangent() const = 0;
 };
 
-/// A law of the Hencky strain e = 1/2 ln(F F^T): Kirchhoff stress tau(e) = the small-strain law's
-/// stress at e.  Without a small-strain law, Hencky elasticity tau = D e (exact for moderate
-/// strains of metals: Anand, J. Appl. Mech. 46, 1979).
+/// A law of the Hencky strain e = 1/2 ln(F F^T): the small-strain law's stress at e is the
+/// measure's stress (Cauchy: sigma = D e, Abaqus's; Kirchhoff: tau = D e, Hencky's hyperelastic
+/// law, Anand, J. Appl. Mech. 46, 1979).  Without a small-strain law, elasticity.
 class HenckyPointLaw final : public FiniteStrainPointLaw {
 public:
   /// `law` may be null (elasticity).
-  HenckyPointLaw(const ElasticMaterial& elastic, std::unique_ptr<PointLaw> law);
+  HenckyPointLaw(const ElasticMaterial& elastic, std::unique_ptr<PointLaw> law, ElasticStressMeasure measure);
   FiniteStrainResponse respond(std::size_t point, const Deformation& F) const override;
   NominalTangent unloading_tangent(std::size_t point, const Deformation& F) const override;
   void commit(std::size_t point, const Deformation& F) override;
@@ -62,10 +67,12 @@ public:
   }
   std::vector<double> history() const override { return law_ ? law_->history() : std::vector<double>{}; }
   void restore(const std::vector<double>& history) override;
+  bool symmetric_tangent() const override { return measure_ == ElasticStressMeasure::kirchhoff; }
 
 private:
   ConstitutiveMatrix elastic_;
   std::unique_ptr<PointLaw> law_;
+  ElasticStressMeasure measure_;
 };
 
 /// History of one Gauss point of J2 in the multiplicative split.
@@ -76,17 +83,18 @@ struct J2FiniteState {
 
 /// J2 flow theory with isotropic hardening in the logarithmic-strain framework (de Souza Neto,
 /// Peric and Owen, 2008, box 14.3): b_e^tr = F C_p^-1 F^T, the small-strain radial return on
-/// e_e^tr = 1/2 ln b_e^tr gives the Kirchhoff stress and e_e, and C_p^-1 = F^-1 exp(2 e_e) F^-T.
+/// e_e^tr = 1/2 ln b_e^tr gives the measure's stress and e_e, and C_p^-1 = F^-1 exp(2 e_e) F^-T.
 /// The exponential map keeps plastic flow isochoric exactly (det C_p = 1).
 class J2LogStrainPointLaw final : public FiniteStrainPointLaw {
 public:
-  J2LogStrainPointLaw(const J2Law& law, std::size_t points);
+  J2LogStrainPointLaw(const J2Law& law, std::size_t points, ElasticStressMeasure measure);
   FiniteStrainResponse respond(std::size_t point, const Deformation& F) const override;
   NominalTangent unloading_tangent(std::size_t point, const Deformation& F) const override;
   void commit(std::size_t point, const Deformation& F) override;
   bool has_yielded(std::size_t point) const override { return state_[point].equivalent_plastic_strain > 0.0; }
   std::vector<double> history() const override;
   void restore(const std::vector<double>& history) override;
+  bool symmetric_tangent() const override { return measure_ == ElasticStressMeasure::kirchhoff; }
   const J2FiniteState& state(std::size_t point) const { return state_[point]; }
 
 private:
@@ -94,6 +102,7 @@ private:
   FiniteStrainResponse respond(const Deformation& F, const J2FiniteState& old, J2FiniteState* updated) const;
   J2Law law_;
   std::vector<J2FiniteState, Eigen::aligned_allocator<J2FiniteState>> state_;
+  ElasticStressMeasure measure_;
 };
 
 }  // namespace indentsim
