@@ -825,6 +825,28 @@ TEST(FiniteStrainRun, UnbuiltCombinationsAreRefusedNamingTheKey) {
   refused({"solver.linear=\"cholmod\""}, "solver.linear");
 }
 
+TEST(FiniteStrainRun, TheElasticStressMeasureBelongsToFiniteStrainAndTravelsWithTheCase) {
+  // Small strain cannot tell sigma from tau: the key is refused there, naming it.  In finite
+  // strain the Cauchy stress is the default, and a case written out (case.toml, what a resumed run
+  // and a study's runs read) keeps the choice.
+  try {
+    indentsim::testing::shipped_case("axisymmetric/elastic_sphere.toml",
+                                     {"geometry.strain=\"small\"", "material.elastic_stress=\"kirchhoff\""});
+    ADD_FAILURE() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.key(), "material.elastic_stress") << e.what();
+  }
+  const LoadCase plain = indentsim::testing::shipped_case("axisymmetric/elastic_sphere.toml", {"geometry.strain=\"finite\""});
+  EXPECT_EQ(plain.material.elastic_stress, ElasticStressMeasure::cauchy);
+  for (const char* strain : {"finite", "auto"}) {
+    const LoadCase lc = indentsim::testing::shipped_case(
+        "axisymmetric/elastic_sphere.toml",
+        {fmt::format("geometry.strain=\"{}\"", strain), "material.elastic_stress=\"kirchhoff\""});
+    EXPECT_EQ(lc.material.elastic_stress, ElasticStressMeasure::kirchhoff);
+    EXPECT_EQ(parse_load_case(to_toml(lc), "case.toml").material.elastic_stress, ElasticStressMeasure::kirchhoff);
+  }
+}
+
 #include <csignal>
 
 #include <nlohmann/json.hpp>
