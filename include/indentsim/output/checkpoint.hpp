@@ -24,8 +24,10 @@ namespace indentsim {
 // 4: the pilot's plastic zone growth; 5: the true contacts of the peaks passed, and the case as run
 // (the pilot's measurements as keys); 6: the force scales the state's two displacements converged
 // on (resume checks the state's equilibrium against them); 7: finite strain's history holds the
-// largest far-field gradient.
-constexpr std::uint32_t checkpoint_format_version = 7;
+// largest far-field gradient; 8: the case as run names finite strain's elastic stress
+// (material.elastic_stress): a format-7 finite-strain run took the Kirchhoff stress = D : e, which
+// its case does not say, so it is not read as a Cauchy run.
+constexpr std::uint32_t checkpoint_format_version = 8;
 
 struct Checkpoint {
   std::string load_case_toml;            ///< to_toml() of the load case as run
