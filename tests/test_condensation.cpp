@@ -294,24 +294,30 @@ TEST(ChordSteps, KeepTheCurveAndSaveFactorizations) {
   }
 }
 
-// solver.jacobian = "krylov" (the default for plastic specimens): GMRES on the exact Jacobian,
-// preconditioned by a factorization kept across the Newton iterations of an increment.  The same
-// equations to the same tolerance as a factorization every iteration -- both plastic models, both
-// scenes, a load path that unloads, both sparse direct solvers as the preconditioner -- with fewer
-// factorizations than even the chord steps of "reuse".
+// solver.jacobian = "krylov" (the default for plastic specimens and for finite strain): GMRES on
+// the exact Jacobian, preconditioned by a factorization kept across the Newton iterations of an
+// increment.  The same equations to the same tolerance as a factorization every iteration -- both
+// plastic models, both scenes, a load path that unloads, both sparse direct solvers as the
+// preconditioner, an elastic near field in finite strain -- with fewer factorizations than even
+// the chord steps of "reuse".
 TEST(KrylovSolves, KeepTheCurveWithFewerFactorizations) {
   struct Scene {
+    const char* label;
     const char* name;
     std::vector<std::string> overrides;
   };
   const std::vector<Scene> scenes{
-      {"deep_plastic.toml", {"mesh.contact_nodes=10"}},                                  // Ilyushin, plane strain
-      {"load_unload.toml", {"mesh.contact_nodes=8"}},                                    // J2, unloading
-      {"axisymmetric/steel_sphere.toml", {"mesh.contact_nodes=8", "load.increments=[6, 3, 1]"}},  // J2, axisymmetric
-      {"deep_plastic.toml", {"mesh.contact_nodes=8", "solver.linear=cholmod"}},           // CHOLMOD preconditions
+      {"Ilyushin, plane strain", "deep_plastic.toml", {"mesh.contact_nodes=10"}},
+      {"J2, unloading", "load_unload.toml", {"mesh.contact_nodes=8"}},
+      {"J2, axisymmetric", "axisymmetric/steel_sphere.toml", {"mesh.contact_nodes=8", "load.increments=[6, 3, 1]"}},
+      {"CHOLMOD preconditions", "deep_plastic.toml", {"mesh.contact_nodes=8", "solver.linear=cholmod"}},
+      {"elastic, finite strain", "axisymmetric/elastic_sphere.toml",
+       {"mesh.contact_nodes=8", "geometry.strain=\"finite\"", "mesh.error_estimate=\"off\""}},
   };
   for (const Scene& scene : scenes) {
-    SCOPED_TRACE(scene.name + std::string(scene.overrides.size() > 1 ? " (cholmod)" : ""));
+    SCOPED_TRACE(fmt::format("{} ({})", scene.name, scene.label));
+    // What "auto" chooses: every one of these bulks is nonlinear.
+    EXPECT_EQ(Simulation(shipped_case(scene.name, scene.overrides)).configuration().jacobian, JacobianChoice::krylov);
     auto with = [&](const char* jacobian) {
       std::vector<std::string> o = scene.overrides;
       o.push_back(std::string("solver.jacobian=") + jacobian);
@@ -330,7 +336,7 @@ TEST(KrylovSolves, KeepTheCurveWithFewerFactorizations) {
     expect_same_curve(krylov, fresh, 1e-8);
     EXPECT_GT(linear_iterations, 0);  // GMRES did the solving
     EXPECT_LT(krylov.factorizations, reuse.factorizations);
-    RecordProperty(std::string("factorizations_") + scene.name,
+    RecordProperty(fmt::format("factorizations_{}_{}", scene.name, scene.label),
                    fmt::format("{} krylov, {} reuse, {} fresh", krylov.factorizations, reuse.factorizations,
                                fresh.factorizations));
   }

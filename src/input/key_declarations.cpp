@@ -594,7 +594,7 @@ const std::vector<KeyDeclaration>& key_declarations() {
                             "how a Newton iteration solves its linear system: krylov (GMRES preconditioned by a "
                             "factorization kept across the iterations), reuse (a factorization per iteration; a "
                             "converging one may keep the last), fresh (factor every iteration), auto (krylov for a "
-                            "plastic specimen, reuse for an elastic one)"},
+                            "plastic specimen or finite strain, reuse for an elastic one in small strain)"},
                            jacobian_names, [](auto& c) -> auto& { return c.solver.jacobian; }));
     k.push_back(choice_key({"contact", "discretization", "choice", "", "",
                             "node_to_rigid (a complementarity row per surface node, the seed paper's), "

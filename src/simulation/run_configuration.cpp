@@ -258,9 +258,13 @@ RunConfiguration resolve_choices(const LoadCase& lc, const RunPlan& plan, const 
   const bool plastic = lc.material.model != MaterialModel::elastic;
   // Plastic Newton iterations contract linearly (each moves the yield front across Gauss points
   // where the tangent jumps), so a factorization kept as GMRES's preconditioner serves several of
-  // them; elastic contact converges in two or three exact steps on a small condensed system.
-  c.jacobian = lc.solver.jacobian == JacobianChoice::automatic ? (plastic ? JacobianChoice::krylov : JacobianChoice::reuse)
-                                                               : lc.solver.jacobian;
+  // them; so it does for an elastic near field in finite strain, nonlinear and thousands of
+  // unknowns large (docs/DESIGN.md §8).  Elastic contact in small strain converges in two or three
+  // exact steps on a small condensed system.
+  const bool nonlinear_bulk = plastic || finite_strain;
+  c.jacobian = lc.solver.jacobian == JacobianChoice::automatic
+                   ? (nonlinear_bulk ? JacobianChoice::krylov : JacobianChoice::reuse)
+                   : lc.solver.jacobian;
   const Mesh mesh = Mesh::from_plan(lc, plan.mesh);  // coordinates and numbering only: cheap
   if (near_field) {
     c.near_field = *near_field;
