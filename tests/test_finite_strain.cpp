@@ -825,6 +825,51 @@ TEST(FiniteStrainRun, UnbuiltCombinationsAreRefusedNamingTheKey) {
   refused({"solver.linear=\"cholmod\""}, "solver.linear");
 }
 
+TEST(FiniteStrainRun, AFlatPunchWhoseRimNodeSlidesOffItsFaceStopsNamingTheRimAndTheWaysOut) {
+  // A J2 block (nu = 0.45) under a plane-strain flat punch flows outwards under the face: in
+  // finite strain the rim node slides past x = R, where the vertical gap ends, opens, springs back
+  // and closes again (MODEL.md §12.3).  The run stops as an increment that did not converge, and
+  // its message names the rim; the same edge given a finite slope as a profile converges.
+  const auto block = [](const std::string& punch) {
+    return parse_load_case(R"(
+[geometry]
+kind = "plane_strain"
+lx = 1.33207e-4
+ly = 1.53042e-4
+strain = "finite"
+[punch]
+)" + punch + R"(
+[material]
+model = "j2"
+E = 4e11
+nu = 0.45
+yield_stress = 1.2e9
+hardening = "power"
+n = 0.3
+[load]
+path = [0.0, 2e-7]
+increments = 5
+[mesh]
+contact_nodes = 8
+error_estimate = "off"
+)",
+                           "rim.toml");
+  };
+  try {
+    Simulation sim(block("shape = \"flat\"\nradius = 1.56927e-5"));
+    sim.run();
+    ADD_FAILURE() << "the flat punch's rim did not stop the run: is its side wall modelled now? (MODEL.md §12.3)";
+  } catch (const SolverError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("did not converge"), std::string::npos) << what;
+    EXPECT_NE(what.find("flat punch's rim (x = 1.56927e-05 m)"), std::string::npos) << what;
+    EXPECT_NE(what.find("geometry.strain = \"small\""), std::string::npos) << what;
+    EXPECT_NE(what.find("punch.shape = \"profile\""), std::string::npos) << what;
+  }
+  EXPECT_GT(peak_force(block("shape = \"profile\"\nprofile_points = [[0.0, 0.0], [1.56927e-5, 0.0], [1.6e-5, 1e-5]]")),
+            0.0);
+}
+
 TEST(FiniteStrainRun, TheElasticStressMeasureBelongsToFiniteStrainAndTravelsWithTheCase) {
   // Small strain cannot tell sigma from tau: the key is refused there, naming it.  In finite
   // strain the Cauchy stress is the default, and a case written out (case.toml, what a resumed run

@@ -272,8 +272,7 @@ RunConfiguration resolve_choices(const LoadCase& lc, const RunPlan& plan, const 
   } else if (plan.plastic_zone.empty()) {
     // Finite strain integrates the near elements nonlinearly even when elastic: they are planned
     // as a plastic zone's would be (2.5 a), so that the run does not grow them increment by increment.
-    c.near_field = choose_near_field(lc, mesh, plan.mesh, plastic || finite_strain,
-                                     std::nullopt);
+    c.near_field = choose_near_field(lc, mesh, plan.mesh, nonlinear_bulk, std::nullopt);
   } else {
     // Whether to condense is decided on the zone of the deepest point; the near field starts as
     // large as the first increments need and grows with the zone (Simulation::anticipate_plastic_zone).

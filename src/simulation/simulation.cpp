@@ -198,11 +198,12 @@ IncrementRecord Simulation::advance_to(double target) {
     if (cutbacks >= load_case_.solver.max_cutbacks) {
       const NewtonReport report = last_report_;  // a copy: returning to the reported state may rebuild the system
       return_to_reported();
+      const std::optional<std::string> cause = report.cycling ? contact_->known_cycling_cause() : std::nullopt;
       throw SolverError(fmt::format(
           "the increment from alpha = {:.6g} m to {:.6g} m did not converge after {} cutbacks (last try: "
-          "alpha = {:.6g} m, {} Newton iterations, scaled residual {:.3g}, KINSOL flag {}{}{})",
+          "alpha = {:.6g} m, {} Newton iterations, scaled residual {:.3g}, KINSOL flag {}{}{}){}{}",
           state_.alpha, target, cutbacks, trial, report.iterations, report.residual, report.kinsol_flag,
-          report.message.empty() ? "" : ": ", report.message));
+          report.message.empty() ? "" : ": ", report.message, cause ? ": " : "", cause ? *cause : ""));
     }
     step *= 0.5;
     ++cutbacks;

@@ -5,6 +5,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include <fmt/format.h>
+
 #include "indentsim/solvers/contact.hpp"
 
 namespace indentsim {
@@ -14,6 +16,17 @@ double surface_curvature(const PunchShape& punch, double x, double scale) {
   const double plus = punch.slope(x + h), minus = punch.slope(std::max(0.0, x - h));
   if (!std::isfinite(plus) || !std::isfinite(minus)) return 0.0;
   return (plus - minus) / (x + h - std::max(0.0, x - h));
+}
+
+std::optional<std::string> rim_cycling_cause(const PunchShape& punch) {
+  const std::optional<double> rim = punch.rim();
+  if (!rim) return std::nullopt;
+  return fmt::format(
+      "the contact set cycles at the {} punch's rim (x = {:.6g} m), where finite strain's gap ends: a node that "
+      "slides outwards past it opens and springs back under the face, and the punch's corner and side wall are "
+      "not modelled (docs/MODEL.md §12.3); run the case with geometry.strain = \"small\" (or \"auto\"), or "
+      "give the punch's edge a finite slope as punch.shape = \"profile\"",
+      punch.name(), *rim);
 }
 
 CurrentConfigurationContact::CurrentConfigurationContact(const Mesh& mesh, std::shared_ptr<const PunchShape> punch,

@@ -363,6 +363,7 @@ NewtonReport NewtonSolver::solve(double alpha, std::vector<double>& u, Globaliza
   // Trust the residual, not the return code alone: KIN_STEP_LT_STPTOL and friends are not
   // convergence, and a success must really satisfy the tolerance.
   report.converged = report.kinsol_flag >= 0 && report.residual <= m.settings.tolerance;
+  report.cycling = m.cycling;
   report.message = m.cycling ? "active-set cycling between contact sets detected" : m.last_message;
   report.residual_history = m.residual_history;
   report.stopped_while_converging = !report.converged && report.kinsol_flag == KIN_MAXITER_REACHED &&

@@ -19,6 +19,8 @@
 // contact keeps the matrix symmetric; KLU takes any rows.
 #include <cstdint>
 #include <memory>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include "indentsim/geometry/punch.hpp"
@@ -124,6 +126,9 @@ public:
   /// True when the rows carry a history whose derivative under a material parameter is not
   /// carried (friction): the forward sensitivities are then unavailable.
   virtual bool carries_history() const { return false; }
+  /// Where the model itself has no answer between two contact sets, so that Newton cycles
+  /// between them at every depth: what a failed increment's message should name, if known.
+  virtual std::optional<std::string> known_cycling_cause() const { return std::nullopt; }
   /// The discretization of an increment that unloads from u (the exact unloading stiffness of
   /// rows that carry history: friction's, with u committed); nullptr for the rows as they are.
   virtual std::unique_ptr<ContactDiscretization> at_load_reversal(const double* /*u*/) const { return nullptr; }

@@ -61,6 +61,7 @@ public:
 
   void hold_committed_state(const double* u_committed) override;
   bool carries_history() const override { return true; }
+  std::optional<std::string> known_cycling_cause() const override { return rim_cycling_cause(*punch_shape()); }
   std::unique_ptr<ContactDiscretization> at_load_reversal(const double* u) const override;
 
   /// The contact state: P the punch's vertical force, each contact node's tangential force along

@@ -14,6 +14,8 @@
 // Sneddon's cone: the surface moves inward as it is pressed, and the contact is where it now is.
 // Candidates are the top nodes whose reference abscissa lies under the punch (as node-to-rigid's).
 #include <memory>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include "indentsim/geometry/mesh.hpp"
@@ -24,6 +26,12 @@ namespace indentsim {
 /// g''(x) by central differences of g' over 1e-6 `scale` (the profiles give g and g' in closed
 /// form or as cubics; the second derivative only enters Jacobian rows); 0 beyond a rim.
 double surface_curvature(const PunchShape& punch, double x, double scale);
+
+/// A punch whose surface ends at a rim (the flat punch): its side wall and corner are no graph
+/// y = g(x), so a node that slides outwards past the rim opens, springs back and closes again,
+/// and the contact set cycles (docs/MODEL.md §12.3).  The cause and the ways out, worded for a
+/// failed increment's message; nothing for punches without a rim.
+std::optional<std::string> rim_cycling_cause(const PunchShape& punch);
 
 class CurrentConfigurationContact final : public ContactDiscretization {
 public:
@@ -55,6 +63,7 @@ public:
   double half_width(const double* u, double alpha, const ContactResult& contact) const override;
   bool touches(const double* u, double alpha) const override;
   std::vector<double> admissibility_violation(const double* u, double alpha) const override;
+  std::optional<std::string> known_cycling_cause() const override { return rim_cycling_cause(*punch_shape()); }
 
 private:
   bool active(std::size_t candidate, const double* u, double alpha, double vertical_row_force) const;

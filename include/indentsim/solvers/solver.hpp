@@ -134,6 +134,8 @@ struct NewtonReport {
   /// Not converged within its iterations, but its last iterate was its best: still converging
   /// (another attempt may go on from it) rather than wandering or diverging.
   bool stopped_while_converging = false;
+  /// Stopped because the contact set returned to one it had left (ActiveSetHistory).
+  bool cycling = false;
   std::string message;          ///< KINSOL's own words when it failed
   std::vector<double> residual_history;  ///< max |F| / force_scale at each residual evaluation (the first 10 000)
 };
