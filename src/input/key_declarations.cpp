@@ -446,17 +446,44 @@ const std::vector<KeyDeclaration>& key_declarations() {
       k.push_back(measure);
     }
     {
+      KeyDeclaration control = choice_key({"load", "control", "choice", "", "",
+                                           "what load.path steps: depth (the force is the result) or force (the "
+                                           "depth is solved for with each increment; docs/MODEL.md §13.1)"},
+                                          load_control_names, [](auto& c) -> auto& { return c.load.control; });
+      // Written only when it is "force": a depth-controlled case's text (and a sweep's hash of it)
+      // stays what it was before the key existed.
+      const auto write = control.write;
+      control.write = [write](const LoadCase& lc) -> std::optional<std::string> {
+        if (lc.load.control == LoadControlKind::depth) return std::nullopt;
+        return write(lc);
+      };
+      control.default_words = "\"depth\"";
+      k.push_back(control);
+    }
+    {
       const auto path = [](auto& c) -> auto& { return c.load.path; };
-      KeyDeclaration d = numbers_key({"load", "path", "array of numbers", "from 0, each >= 0", "m",
-                                      "depth waypoints h, piecewise linear; may go down (unload, separate) and up again",
+      KeyDeclaration d = numbers_key({"load", "path", "array of numbers", "from 0, each >= 0", "m or N",
+                                      "waypoints of load.control's quantity, piecewise linear: depths h [m], or "
+                                      "forces P [N; N/m in plane strain]; may go down (unload, separate) and up again",
                                       true},
                                      path);
       d.plausible = KeyDeclaration::Plausible{1e-10, 0.1, "indentation depths (the deepest waypoint)"};
+      // Forces span nano- to macro-indentation (1e-9 N to 1e4 N, per metre in plane strain): no
+      // magnitude tells a slip there.
       d.magnitudes = [](const LoadCase& lc) -> std::vector<double> {
-        if (lc.load.path.empty()) return {};
-        return {*std::max_element(lc.load.path.begin(), lc.load.path.end())};
+        if (lc.load.path.empty() || lc.load.control == LoadControlKind::force) return {};
+        return {lc.load.largest_target()};
       };
       k.push_back(d);
+    }
+    {
+      KeyDeclaration estimate = optional_number_key(
+          {"load", "depth_estimate", "number", "> 0", "m",
+           "force control: the depth the largest force reaches, which sizes the mesh (written by case.toml from "
+           "the depth pilot; given, the run needs no pilot)"},
+          [](auto& c) -> auto& { return c.load.depth_estimate; });
+      estimate.default_words = "none: measured by the depth pilot";
+      k.push_back(estimate);
     }
     {
       KeyDeclaration inc{"load", "increments", "integer or array of integers", "[1, 1e7] in all", "",

@@ -39,6 +39,8 @@ inline constexpr Choice<TableExtension> table_extension_names[] = {{"flat", Tabl
                                                                    {"last_slope", TableExtension::last_slope}};
 inline constexpr Choice<ElasticStressMeasure> elastic_stress_names[] = {{"cauchy", ElasticStressMeasure::cauchy},
                                                                        {"kirchhoff", ElasticStressMeasure::kirchhoff}};
+inline constexpr Choice<LoadControlKind> load_control_names[] = {{"depth", LoadControlKind::depth},
+                                                                 {"force", LoadControlKind::force}};
 inline constexpr Choice<ElementChoice> element_names[] = {
     {"auto", ElementChoice::automatic}, {"q1", ElementChoice::q1}, {"bbar", ElementChoice::bbar}};
 inline constexpr Choice<LinearSolverChoice> linear_names[] = {

@@ -20,10 +20,15 @@ namespace indentsim {
 
 using namespace input_detail;
 
+double LoadInput::largest_target() const {
+  double largest = 0.0;
+  for (double target : path) largest = std::max(largest, target);
+  return largest;
+}
+
 double LoadCase::max_depth() const {
-  double deepest = 0.0;
-  for (double alpha : load.path) deepest = std::max(deepest, alpha);
-  return deepest;
+  if (load.control == LoadControlKind::force) return load.depth_estimate.value_or(0.0);
+  return load.largest_target();
 }
 
 int LoadInput::total_increments() const {
@@ -45,6 +50,7 @@ std::string to_string(TableExtension extension) { return name_of(table_extension
 std::string to_string(ElasticStressMeasure measure) { return name_of(elastic_stress_names, measure); }
 std::string to_string(SceneKind kind) { return name_of(scene_names, kind); }
 std::string to_string(StrainChoice strain) { return name_of(strain_names, strain); }
+std::string to_string(LoadControlKind control) { return name_of(load_control_names, control); }
 std::string to_string(PunchShapeKind shape) { return name_of(shape_names, shape); }
 
 namespace input_detail {

@@ -210,22 +210,43 @@ void validate(const LoadCase& lc) {
   const auto& path = lc.load.path;
   if (path.size() < 2) fail("load.path", "needs at least two waypoints, starting at 0");
   if (path.front() != 0.0) fail("load.path", fmt::format("must start at 0 (got {})", path.front()));
+  const bool force_control = lc.load.control == LoadControlKind::force;
+  const char* quantity = force_control ? "force" : "depth";
   for (std::size_t i = 0; i < path.size(); ++i)
-    if (path[i] < 0.0) fail("load.path", fmt::format("waypoint {} is a negative depth ({})", i, path[i]));
-  if (!(lc.max_depth() > 0.0)) fail("load.path", "never indents: every waypoint is 0");
-  // The gap g(x) = R - sqrt(R^2 - x^2) and the displacements are resolved against R and the
-  // block in double precision: a depth below 1e-9 of them is round-off, not an indentation.
-  const double resolvable = 1e-9 * std::max(has_radius ? lc.punch.radius : 0.0, lc.geometry.ly);
-  if (lc.max_depth() < resolvable)
-    fail("load.path", fmt::format("the deepest depth {:g} m is below what double precision resolves against the "
+    if (!(path[i] >= 0.0) || !std::isfinite(path[i]))
+      fail("load.path", fmt::format("waypoint {} is not a {} >= 0 ({})", i, quantity, path[i]));
+  if (!(lc.load.largest_target() > 0.0))
+    fail("load.path", force_control ? "never loads: every waypoint is 0" : "never indents: every waypoint is 0");
+  if (lc.load.depth_estimate && !force_control)
+    fail("load.depth_estimate", "is the depth pilot's measurement under load.control = \"force\"; under depth "
+                                "control the deepest waypoint is the depth");
+  if (force_control) {
+    // The bordered Newton system (docs/MODEL.md §13.1) has a row and a column CHOLMOD's symmetric
+    // factorization cannot take.
+    if (lc.solver.linear == LinearSolverChoice::cholmod)
+      fail("solver.linear", "\"cholmod\" cannot factor the force-controlled Newton system (its force row and depth "
+                            "column are not symmetric): use \"klu\" or \"auto\"");
+    if (lc.contact.discretization == ContactDiscretizationChoice::integrated_gap)
+      fail("load.control", "\"force\" is built with contact.discretization = \"node_to_rigid\" only (the integrated "
+                           "gap's penalty force is not yet a row of the force-controlled system)");
+  }
+  // Depth checks: on the deepest waypoint, or on the depth pilot's estimate once it is measured.
+  const char* depth_key = force_control ? "load.depth_estimate" : "load.path";
+  if (lc.max_depth() > 0.0) {
+    // The gap g(x) = R - sqrt(R^2 - x^2) and the displacements are resolved against R and the
+    // block in double precision: a depth below 1e-9 of them is round-off, not an indentation.
+    const double resolvable = 1e-9 * std::max(has_radius ? lc.punch.radius : 0.0, lc.geometry.ly);
+    if (lc.max_depth() < resolvable)
+      fail(depth_key, fmt::format("the deepest depth {:g} m is below what double precision resolves against the "
                                   "punch radius and the block ({:g} m, 1e-9 of them)",
                                   lc.max_depth(), resolvable));
-  if (punch.shape == PunchShapeKind::sphere && lc.max_depth() >= lc.punch.radius)
-    fail("load.path", fmt::format("depth {} reaches the punch radius {}: no circular contact possible",
+    if (punch.shape == PunchShapeKind::sphere && lc.max_depth() >= lc.punch.radius)
+      fail(depth_key, fmt::format("depth {} reaches the punch radius {}: no circular contact possible",
                                   lc.max_depth(), lc.punch.radius));
-  if (lc.max_depth() >= lc.geometry.ly)
-    fail("load.path", fmt::format("depth {} is not small against the block depth {}", lc.max_depth(),
+    if (lc.max_depth() >= lc.geometry.ly)
+      fail(depth_key, fmt::format("depth {} is not small against the block depth {}", lc.max_depth(),
                                   lc.geometry.ly));
+  }
   if (!lc.load.segment_increments.empty() && lc.load.segment_increments.size() + 1 != path.size())
     fail("load.path", fmt::format("has {} segments, but load.increments gives {} per-segment counts: set the two "
                                   "together (or load.increments as one total, spread by path length)",
@@ -252,6 +273,8 @@ void validate(const LoadCase& lc) {
   }
   if (lc.mesh.contact_half_width && punch.shape == PunchShapeKind::flat)
     fail("mesh.contact_half_width", "a flat punch's contact radius is punch.radius: the mesh is sized from it");
+  if (lc.mesh.target_error && force_control)
+    fail("mesh.target_error", "needs an error estimate, which load.control = \"force\" does not have yet");
   if (lc.mesh.target_error && lc.mesh.error_estimate == ErrorEstimateChoice::off)
     fail("mesh.target_error", "needs an error estimate: mesh.error_estimate = \"off\" cannot check a target");
 

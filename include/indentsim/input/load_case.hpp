@@ -75,13 +75,26 @@ struct MaterialInput {
   bool flow_stress_law() const { return hardening != HardeningLaw::linear && hardening != HardeningLaw::power; }
 };
 
+/// What the load path steps (docs/MODEL.md §13.1): the punch's depth, the force P being the
+/// result, or the force, the depth being one more unknown of each increment.
+enum class LoadControlKind { depth, force };
+
 struct LoadInput {
-  std::vector<double> path{0.0, 5e-5};  ///< indentation depth waypoints alpha [m], from 0
+  LoadControlKind control = LoadControlKind::depth;
+  /// The waypoints of the controlled quantity, from 0: depths alpha [m] under depth control,
+  /// forces P [N; N/m in plane strain] under force control.
+  std::vector<double> path{0.0, 5e-5};
   int increments = 10;                  ///< total increments along the path
   /// Optional per-segment counts (`increments = [n1, n2, ...]`, one per segment of the path);
   /// empty when `increments` is a single total spread by segment length.
   std::vector<int> segment_increments;
+  /// Force control: the depth the largest force reaches, as the depth pilot measured it
+  /// (run_configuration.hpp); it sizes the mesh as the deepest waypoint does under depth control.
+  /// case.toml records it, so that the case as run plans the same mesh without the pilot.
+  std::optional<double> depth_estimate;
 
+  /// The largest waypoint of the controlled quantity.
+  double largest_target() const;
   /// The increments of the whole path.
   int total_increments() const;
   /// Every segment's increments (or the total) multiplied by `factor` >= 1: the same waypoints,
@@ -184,6 +197,8 @@ struct LoadCase {
   ContactInput contact;
   AnalysisInput analysis;
 
+  /// The deepest point of the path [m]: the deepest waypoint under depth control; under force
+  /// control the depth estimate (0 before the pilot has measured it).
   double max_depth() const;
 };
 
@@ -269,6 +284,7 @@ std::string first_physics_difference(const LoadCase& a, const LoadCase& b);
 std::string to_string(MaterialModel model);
 std::string to_string(SceneKind kind);
 std::string to_string(StrainChoice strain);
+std::string to_string(LoadControlKind control);
 std::string to_string(PunchShapeKind shape);
 std::string to_string(HardeningLaw law);
 std::string to_string(TableExtension extension);
