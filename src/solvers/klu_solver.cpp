@@ -9,6 +9,8 @@
 #include <nvector/nvector_serial.h>
 #include <sunmatrix/sunmatrix_sparse.h>
 
+#include <algorithm>
+
 #include "fill_reducing_order.hpp"
 
 namespace indentsim {
@@ -48,11 +50,17 @@ struct KluSolver::State {
 
   // The pattern's symbolic analysis, and the reference factorization that fixes the pivots.
   bool analyse(std::vector<SuiteSparse_long> columns, std::vector<SuiteSparse_long> rows,
-               const std::vector<std::int64_t>& dense_block, double* values) {
+               const std::vector<std::int64_t>& dense_block, std::int64_t last, double* values) {
     column_start = std::move(columns);
     row_index = std::move(rows);
     const auto n = static_cast<SuiteSparse_long>(column_start.size() - 1);
     std::vector<std::int64_t> order = fill_reducing_order(column_start, row_index, dense_block);
+    // An unknown whose pivot the reference cannot choose goes last: its pivot is then the Schur
+    // complement of all the others (force control's depth).
+    if (last >= 0 && !order.empty()) {
+      order.erase(std::find(order.begin(), order.end(), last));
+      order.push_back(last);
+    }
     symbolic = order.empty()
                    ? klu_l_analyze(n, column_start.data(), row_index.data(), &common)
                    : klu_l_analyze_given(n, column_start.data(), row_index.data(), order.data(), order.data(), &common);
@@ -106,7 +114,7 @@ int setup(SUNLinearSolver s, SUNMatrix a) {
     const auto n = static_cast<std::size_t>(SUNSparseMatrix_Columns(a));
     const sunindextype* colptr = SUNSparseMatrix_IndexPointers(a);
     const sunindextype* rowind = SUNSparseMatrix_IndexValues(a);
-    if (!k.analyse({colptr, colptr + n + 1}, {rowind, rowind + colptr[n]}, {}, SUNSparseMatrix_Data(a)))
+    if (!k.analyse({colptr, colptr + n + 1}, {rowind, rowind + colptr[n]}, {}, -1, SUNSparseMatrix_Data(a)))
       return k.last_flag = SUNLS_PACKAGE_FAIL_UNREC;
     ++k.numeric_factorizations;
     k.estimate_condition_of(a);
@@ -139,7 +147,7 @@ void KluSolver::analyse(const StiffnessPattern& pattern, std::vector<double> ref
   const auto& column_start = pattern.column_start();
   const auto& row_index = pattern.row_index();
   if (!state_->analyse({column_start.begin(), column_start.end()}, {row_index.begin(), row_index.end()},
-                       pattern.dense_block(), reference_values.data()))
+                       pattern.dense_block(), pattern.eliminated_last(), reference_values.data()))
     throw std::runtime_error(fmt::format("KLU could not factor the elastic stiffness of the Newton system (status {})",
                                          state_->common.status));
 }

@@ -64,6 +64,14 @@ void ContactEquations::jacobian(const double* u, double alpha, double* values) {
     residual_contact_force_.resize(rows.size());
     for (std::size_t i = 0; i < rows.size(); ++i) residual_contact_force_[i] = internal_force_[rows[i]];
   }
+  if (keep_bulk_rows_) {
+    const std::size_t vertical = contact_.candidates().size();
+    bulk_rows_.resize(vertical);
+    for (std::size_t i = 0; i < vertical; ++i) {
+      bulk_rows_[i].resize(contact_rows_[i].size());
+      for (std::size_t p = 0; p < contact_rows_[i].size(); ++p) bulk_rows_[i][p] = values[contact_rows_[i][p]];
+    }
+  }
   signature_ = contact_.write_jacobian_rows(u, alpha, residual_contact_force_.data(), pattern_, contact_rows_, values);
 }
 

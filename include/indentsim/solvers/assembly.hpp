@@ -31,6 +31,10 @@ public:
   /// Unknowns coupled all to all (a condensed near field's interface, docs/DESIGN.md §7; empty
   /// for a mesh's own pattern).  A fill-reducing order eliminates them last, as one block.
   const std::vector<std::int64_t>& dense_block() const { return dense_block_; }
+  /// An unknown every fill-reducing order must eliminate last, or -1: force control's depth, whose
+  /// pivot the reference factorization cannot choose (force_controlled_equations.hpp).
+  std::int64_t eliminated_last() const { return eliminated_last_; }
+  void eliminate_last(std::int64_t unknown) { eliminated_last_ = unknown; }
 
   /// Position in the value array of local entry (a, b) of an element, or -1 when either
   /// unknown is fixed by a Dirichlet condition.  64 entries per element, row-major.
@@ -47,6 +51,7 @@ public:
 private:
   std::int64_t size_ = 0;
   std::vector<std::int64_t> column_start_, row_index_, diagonal_, dense_block_;
+  std::int64_t eliminated_last_ = -1;
   std::vector<std::int32_t> element_position_;
 };
 

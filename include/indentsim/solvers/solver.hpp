@@ -71,6 +71,16 @@ public:
   bool pivot_reference(double* values) override;
   bool symmetric_but_pinned_rows() const override { return contact_.rows_keep_symmetry(); }
 
+  const ContactDiscretization& contact() const { return contact_; }
+  /// The internal force on each contact row (row_equations() order) at the u of the last residual
+  /// or Jacobian evaluated.
+  const std::vector<double>& contact_row_forces() const { return residual_contact_force_; }
+  /// With `keep`, every Jacobian evaluation first saves the bulk's tangent on the candidates'
+  /// vertical rows (the values at row_positions(equation) of each, in its order), which the contact
+  /// rows then overwrite: the force row of force control needs them (force_controlled_equations.hpp).
+  void keep_bulk_rows(bool keep) { keep_bulk_rows_ = keep; }
+  const std::vector<std::vector<double>>& bulk_rows() const { return bulk_rows_; }
+
 private:
   const StiffnessPattern& pattern_;
   BulkOperator* bulk_;
@@ -84,6 +94,8 @@ private:
   std::vector<double> residual_u_, residual_contact_force_;
   const BulkOperator* residual_bulk_ = nullptr;
   std::uint64_t signature_ = 0;
+  bool keep_bulk_rows_ = false;
+  std::vector<std::vector<double>> bulk_rows_;
 };
 
 /// The sparse direct solver that factors the Newton matrices: SuiteSparse KLU or CHOLMOD's
