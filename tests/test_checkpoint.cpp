@@ -89,6 +89,9 @@ TEST(Checkpoint, EveryFieldOfTheRunStateSurvivesTheFile) {
   s.near_field = NearField{true, 3, 2, 1};
   s.plastic_zone_growth.depths = {1e-5, 2e-5};
   s.plastic_zone_growth.extents = {{1e-4, 2e-4}, {3e-4, 4e-4}};
+  s.force = 3.5;
+  s.force_previous = 2.5;
+  s.largest_force = 4.5;
   ASSERT_TRUE(s.has_previous);
   // Each field described as text, by name, through the same list.
   const auto describe = [](const SimulationState& state) {
@@ -113,7 +116,7 @@ TEST(Checkpoint, EveryFieldOfTheRunStateSurvivesTheFile) {
     return fields;
   };
   const auto before = describe(s);
-  EXPECT_EQ(before.size(), 16u);
+  EXPECT_EQ(before.size(), 19u);
   const auto after = describe(deserialize(serialize(c), "memory").state);
   for (const auto& [name, text] : before) EXPECT_EQ(after.at(name), text) << name;
 }

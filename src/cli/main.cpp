@@ -114,7 +114,7 @@ int report_end(const RunReport& report, bool quiet) {
 }
 
 int command_check(const std::string& file, const std::vector<std::string>& overrides) {
-  const LoadCase lc = read_load_case(file, overrides);
+  const LoadCase lc = with_depth_estimate(read_load_case(file, overrides));  // force control's depth pilot
   inspect_output_dir(lc.output.dir, lc.source);
   const RunConfiguration configuration = resolve_choices(lc, plan_run(lc));  // what run uses, pilot included
   const MeshPlan& p = configuration.plan.mesh;

@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "indentsim/base/error.hpp"
+#include "indentsim/simulation/load_control.hpp"
 #include "indentsim/simulation/load_stepping.hpp"
 #include "indentsim/simulation/run_configuration.hpp"
 
@@ -106,18 +107,33 @@ ResumedRun resume_from(const Checkpoint& c, const std::string& source, const std
                                  "the run's case.toml records one tolerance; run the case again with the new one",
                                  stored.solver.tolerance));
 
+  if (run.load_case.load.control != stored.load.control)
+    throw InputError(source, "load.control",
+                     fmt::format("cannot change when resuming: the checkpointed path steps the {}",
+                                 stored.load.control == LoadControlKind::force ? "force" : "depth"));
+  // The mesh and the residual's force row were planned for the largest force of the path.
+  if (stored.load.control == LoadControlKind::force &&
+      run.load_case.load.largest_target() != stored.load.largest_target())
+    throw InputError(source, "load.path",
+                     fmt::format("under force control a resumed path keeps the largest force {:g} (the mesh was planned "
+                                 "for the depth it reaches): run the case again for another",
+                                 stored.load.largest_target()));
   // The new load path must pass through the history already computed.
   const std::vector<double> before = plan_increments(stored.load), after = plan_increments(run.load_case.load);
+  const std::unique_ptr<LoadControl> control = LoadControl::of(stored);
   const std::size_t done = static_cast<std::size_t>(c.state.next_target);
   if (done == 0 || done > before.size()) fail("its state does not fit its own load path");
   if (after.size() < done || !std::equal(before.begin(), before.begin() + static_cast<std::ptrdiff_t>(done), after.begin()))
     throw InputError(source, "load.path",
-                     fmt::format("must follow the checkpointed history for its first {} increments (up to alpha = "
-                                 "{:.6g} m): keep the path's waypoints and increments up to there",
-                                 done - 1, before[done - 1]));
+                     fmt::format("must follow the checkpointed history for its first {} increments (up to {}): keep "
+                                 "the path's waypoints and increments up to there",
+                                 done - 1, control->describe(before[done - 1])));
   if (!(c.planned_contact_half_width > 0.0)) fail("holds no valid mesh plan");
   for (std::size_t k = 0; k < done; ++k)
-    if (c.curve[k].alpha != before[k]) fail(fmt::format("its curve row {} is not at the depth its load path plans", k));
+    if (c.curve.size() <= k ||
+        !control->at_target(c.curve[k], before[k], stored.load.largest_target(), stored.solver.tolerance))
+      fail(fmt::format("its curve row {} is not at the {} its load path plans", k,
+                       control->kind() == LoadControlKind::force ? "force" : "depth"));
   // The run continues on the near field it had (bit for bit), unless --set asks for the whole mesh.
   SimulationState state = c.state;
   if (run.load_case.solver.far_field == FarFieldChoice::full) state.near_field = NearField{};

@@ -224,6 +224,8 @@ RunReport drive(Simulation& sim, RunOutput& output, RunObserver& observer, NewRu
 RunReport run_load_case(LoadCase lc, RunObserver& observer) {
   const auto start = std::chrono::steady_clock::now();
   RunFolder folder(lc.output.dir, lc.source);  // one run per folder: locked before anything is solved
+  // Force control: the depth the largest force reaches sizes the mesh (the depth pilot).
+  lc = with_depth_estimate(std::move(lc));
   // mesh.target_error: pilots choose contact_nodes (and, for a path-dependent run, the
   // increments); the run checks its own estimates and is refined once if it missed.  The case as
   // run (case.toml, checkpoints) has the chosen mesh and increments.

@@ -319,6 +319,11 @@ FitJob read_fit_job(const FitCommandLine& cl) {
   // Data the case cannot produce, and fewer points than parameters, are refused before any run.
   std::size_t points = 0;
   for (const auto& d : problem.data) {
+    // The forward model steps the data's depths (forward_model.cpp says so too).
+    if (d.load_case.load.control == LoadControlKind::force)
+      throw InputError(d.load_case.source, "load.control",
+                       "the fit runs its forward model under depth control at the data's depths: give the case with "
+                       "load.control = \"depth\" (fitting a force-controlled protocol is not built yet)");
     points += d.values.size();
     if (d.kind == FitDataKind::force_depth_curve)
       for (std::size_t i = 0; i < d.abscissa.size(); ++i)

@@ -177,6 +177,12 @@ ForwardModel::ForwardModel(FitData data, std::vector<MaterialParameter> paramete
     : data_(std::move(data)), parameters_(std::move(parameters)), bounds_(bounds) {
   const LoadCase& user = data_.load_case;
   const std::string& file = data_.file;
+  // The forward model steps the data's depths; a force-controlled forward model (the protocol of
+  // a load-controlled instrument) is not built yet (docs/MODEL.md §13).
+  if (user.load.control == LoadControlKind::force)
+    throw InputError(user.source, "load.control",
+                     "the fit runs its forward model under depth control at the data's depths: give the case with "
+                     "load.control = \"depth\" (fitting a force-controlled protocol is not built yet)");
   prepared_ = user;
   // One kinematics for every forward run: "auto" chosen once on the user's case, so that a step
   // of the parameters or a replanned mesh never switches it (the cost stays smooth).

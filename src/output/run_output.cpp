@@ -263,10 +263,12 @@ RunOutput::RunOutput(const std::filesystem::path& dir, const LoadCase& load_case
       profile_depths_(load_case.output.profile_depths),
       curve_(dir / "curve.csv", error_estimate, error_estimate_pending),
       fields_(dir),
-      deepest_depth_(load_case.max_depth()),
       increments_(load_case.load.total_increments()) {
-  for (const CurveBranch& b : unloading_branches(plan_increments(load_case.load)))
-    peak_steps_.push_back(static_cast<int>(b.peak));
+  // The rows are the planned targets, one each: the deepest state is the first row at the largest
+  // target (a depth, or under force control a force).
+  const std::vector<double> targets = plan_increments(load_case.load);
+  deepest_step_ = static_cast<int>(std::max_element(targets.begin(), targets.end()) - targets.begin());
+  for (const CurveBranch& b : unloading_branches(targets)) peak_steps_.push_back(static_cast<int>(b.peak));
   write_file_atomically(dir_ / "case.toml", to_toml(load_case));
   write_file_atomically(dir_ / "summary.json", summary_.json(run_fields_, RunStatus::running, ""));
   for (std::size_t k = 0; k < replay_curve.size(); ++k) {
@@ -279,7 +281,7 @@ RunOutput::RunOutput(const std::filesystem::path& dir, const LoadCase& load_case
     // Fields written before the interruption stay in the series -- those the schedule writes (every
     // fields_every increments, the deepest state); the frame a stop wrote of its last state is
     // not one an uninterrupted run has, and goes.
-    const bool deepest = r.alpha == deepest_depth_ && peak_step_ < 0 && r.step > 0;
+    const bool deepest = r.step == deepest_step_ && peak_step_ < 0 && r.step > 0;
     const bool scheduled = (fields_every_ > 0 && r.step % fields_every_ == 0) || deepest;
     const std::string vtu = fmt::format("fields/step_{:06d}.vtu", r.step);
     if (std::filesystem::exists(dir_ / vtu)) {
@@ -308,7 +310,7 @@ void RunOutput::increment(const IncrementSnapshot& state) {
   record_true_contact(state, record.step);
   // The deepest state is what figures show by default (a history may end unloaded, with nothing
   // to see): its fields are always written and its layer view kept for the tables.
-  if (record.alpha == deepest_depth_ && peak_step_ < 0 && record.step > 0) {
+  if (record.step == deepest_step_ && peak_step_ < 0 && record.step > 0) {
     peak_step_ = record.step;
     if (last_fields_step_ != record.step) write_fields(state, record.step);
     peak_tables_ = layer_tables(state, record.step, true);

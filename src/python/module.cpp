@@ -137,6 +137,7 @@ py::dict check_case(const std::string& file, const std::string& toml_text, const
   {
     py::gil_scoped_release unlocked;
     lc = file.empty() ? parse_load_case(toml_text, source, overrides) : read_load_case(file, overrides);
+    lc = with_depth_estimate(std::move(lc));  // force control's depth pilot
     plan = plan_run(lc).mesh;
     warnings = plausibility_warnings(lc, plan);
     unknowns = Mesh::from_plan(lc, plan).equations();

@@ -9,6 +9,7 @@
 #include "indentsim/base/error.hpp"
 #include "indentsim/geometry/punch.hpp"
 #include "indentsim/simulation/error_estimate.hpp"
+#include "indentsim/simulation/load_control.hpp"
 #include "indentsim/simulation/load_stepping.hpp"
 #include "indentsim/simulation/simulation.hpp"
 #include "indentsim/solvers/contact.hpp"
@@ -44,6 +45,8 @@ PilotResult pilot_run(const LoadCase& lc) {
   pilot.mesh = MeshInput{};
   pilot.mesh.contact_nodes = 8;
   pilot.mesh.contact_half_width = chord;
+  pilot.load.control = LoadControlKind::depth;  // under force control too: to the depth estimate
+  pilot.load.depth_estimate.reset();
   pilot.load.path = {0.0, depth};
   pilot.load.increments = 4;
   pilot.solver.tolerance = std::max(lc.solver.tolerance, 1e-9);
@@ -72,6 +75,87 @@ PilotResult pilot_run(const LoadCase& lc) {
     return {chord, {}};
   }
 }
+
+// The depth pilot of force control.  P(alpha) is measured on a coarse mesh (8 elements across the
+// punch's chord, 4 increments, the whole mesh solved) up to a trial depth, and the depth is
+// rescaled along the curve's own power law at its end, alpha <- alpha (P_max / P)^(1/m) with
+// m = d ln P / d ln alpha from its last two increments, until it moves by less than 2%.  It starts
+// from a depth of the punch's own scale and moves by a factor 10 at most per pilot; near a limit
+// load (m -> 0) it stops at the depth bounds of the case (half the block, half a sphere's radius),
+// where the run itself meets the limit and says so -- or earlier, once d ln P / d ln alpha has
+// fallen below 0.2: the force has stopped rising with the depth.
+constexpr double depth_pilot_tolerance = 0.02;
+constexpr int depth_pilot_runs = 10;
+constexpr double depth_pilot_limit_exponent = 0.2;
+
+struct DepthPilot {
+  double force = 0.0;     ///< P at the pilot's depth
+  double exponent = 0.0;  ///< d ln P / d ln alpha over its last increment
+};
+
+DepthPilot depth_pilot(const LoadCase& lc, double depth) {
+  LoadCase pilot = lc;
+  pilot.load.control = LoadControlKind::depth;
+  pilot.load.depth_estimate.reset();
+  pilot.load.path = {0.0, depth};
+  pilot.load.increments = 4;
+  pilot.load.segment_increments.clear();
+  pilot.mesh = MeshInput{};
+  pilot.mesh.contact_nodes = 8;
+  pilot.mesh.error_estimate = ErrorEstimateChoice::off;
+  if (lc.punch.shape != PunchShapeKind::flat)
+    pilot.mesh.contact_half_width = make_punch(lc.punch)->geometric_contact_radius(depth);
+  pilot.solver.tolerance = std::max(lc.solver.tolerance, 1e-9);
+  pilot.solver.far_field = FarFieldChoice::full;
+  pilot.solver.linear = LinearSolverChoice::klu;
+  Simulation sim(pilot);
+  std::vector<IncrementRecord> rows;
+  sim.run([&](const IncrementRecord& r) { rows.push_back(r); });
+  DepthPilot result;
+  result.force = rows.back().force;
+  const IncrementRecord& before = rows[rows.size() - 2];
+  if (before.force > 0.0 && result.force > 0.0)
+    result.exponent = std::log(result.force / before.force) / std::log(rows.back().alpha / before.alpha);
+  return result;
+}
+
+}  // namespace
+
+LoadCase with_depth_estimate(LoadCase lc) {
+  if (lc.load.control != LoadControlKind::force || lc.load.depth_estimate) return lc;
+  const double target = lc.load.largest_target();
+  double bound = 0.5 * lc.geometry.ly;
+  if (lc.punch.shape == PunchShapeKind::sphere) bound = std::min(bound, 0.5 * lc.punch.radius);
+  if (lc.punch.shape == PunchShapeKind::profile && !lc.punch.profile.empty())
+    bound = std::min(bound, 0.5 * lc.punch.profile.back().second);
+  // The punch's own scale: a thousandth of its radius, or of the block under a cone.
+  const bool has_radius = lc.punch.shape == PunchShapeKind::sphere || lc.punch.shape == PunchShapeKind::flat;
+  double depth = std::min(bound, 1e-3 * (has_radius ? lc.punch.radius : lc.geometry.ly));
+  for (int run = 0; run < depth_pilot_runs; ++run) {
+    DepthPilot pilot;
+    try {
+      pilot = depth_pilot(lc, depth);
+    } catch (const SolverError&) {
+      break;  // the run itself meets what stopped the pilot, and says so
+    }
+    // A force that has stopped rising with the depth lies at a limit load below the target: the
+    // run meets it at about this depth and names it (Simulation::limit_load_note).
+    if (pilot.force < target && pilot.exponent > 0.0 && pilot.exponent < depth_pilot_limit_exponent) break;
+    double factor = 10.0;
+    if (pilot.force > 0.0) {
+      const double exponent = pilot.exponent > 0.0 ? pilot.exponent : force_exponent(lc.punch.shape);
+      factor = std::clamp(std::pow(target / pilot.force, 1.0 / exponent), 0.1, 10.0);
+    }
+    const double next = std::min(bound, depth * factor);
+    const bool settled = std::abs(next / depth - 1.0) < depth_pilot_tolerance || next == depth;
+    depth = next;
+    if (settled) break;
+  }
+  lc.load.depth_estimate = depth;
+  return lc;
+}
+
+namespace {
 
 // "auto": KLU below the measured crossover, CHOLMOD's supernodal Cholesky above it.
 LinearSolverKind choose_linear_solver(LinearSolverChoice choice, int unknowns) {
@@ -168,6 +252,8 @@ std::vector<std::string> plausibility_warnings(const LoadCase& lc, const MeshPla
 }
 
 RunPlan plan_run(const LoadCase& load_case, std::optional<double> planned_contact_half_width) {
+  if (load_case.load.control == LoadControlKind::force && !load_case.load.depth_estimate)
+    throw std::invalid_argument("plan_run: a force-controlled case needs its depth estimate (with_depth_estimate)");
   RunPlan plan{plan_mesh(load_case), {}};  // also refuses a mesh too large before any work
   if (planned_contact_half_width) {
     plan.mesh = plan_mesh(load_case, planned_contact_half_width);
@@ -280,7 +366,8 @@ RunConfiguration resolve_choices(const LoadCase& lc, const RunPlan& plan, const 
     if (c.near_field.condensed) {
       const std::vector<double> targets = plan_increments(lc.load);
       const auto first = std::find_if(targets.begin(), targets.end(), [](double t) { return t > 0.0; });
-      if (first != targets.end()) c.near_field = near_field_for_depth(lc, mesh, plan.mesh, plan.plastic_zone, *first);
+      if (first != targets.end())
+        c.near_field = near_field_for_depth(lc, mesh, plan.mesh, plan.plastic_zone, expected_depth(lc, *first));
     }
   }
   c.unknowns = mesh.equations();
@@ -312,8 +399,9 @@ RunConfiguration resolve_choices(const LoadCase& lc, const RunPlan& plan, const 
   c.linear_solver = choose_linear_solver(lc.solver.linear, static_cast<int>(largest));
   // Sliding friction's rows are unsymmetric (docs/MODEL.md §3.3): only KLU factors them.
   if (lc.contact.friction > 0.0 && std::isfinite(lc.contact.friction)) c.linear_solver = LinearSolverKind::klu;
-  // So are the rows of finite strain's contact and F-bar's tangent (docs/MODEL.md §12).
-  if (finite_strain) c.linear_solver = LinearSolverKind::klu;
+  // So are the rows of finite strain's contact and F-bar's tangent (docs/MODEL.md §12), and force
+  // control's border (docs/MODEL.md §13.1).
+  if (finite_strain || lc.load.control == LoadControlKind::force) c.linear_solver = LinearSolverKind::klu;
   c.companion_contact_nodes = companion_contact_nodes(lc);
   return c;
 }

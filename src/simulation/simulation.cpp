@@ -24,6 +24,11 @@ namespace indentsim {
 
 namespace {
 
+// Under force control, an increment that fails where the loading tangent dP/dalpha has fallen
+// below half the secant P / alpha is taken to be at a limit load (a power law P ~ alpha^m
+// has tangent / secant = m, 1 to 2 for the shapes here).
+constexpr double limit_tangent_ratio = 0.5;
+
 // Deformation theory is exact for monotone loading; Ilyushin's unloading rule is switched on
 // only when the load path itself unloads (a scene that never unloads does not pay for it).
 bool unloads(const std::vector<double>& path) {
@@ -35,11 +40,11 @@ bool unloads(const std::vector<double>& path) {
 }  // namespace
 
 Simulation::Simulation(LoadCase load_case, std::optional<double> planned_contact_half_width,
-                       std::optional<NearField> near_field)
-    : load_case_(std::move(load_case)) {
+                       std::optional<NearField> near_field) {
   RunConfiguration configuration;
   {
     const PhaseTimes::Scope timing = times_.measure("planning");
+    load_case_ = with_depth_estimate(std::move(load_case));
     configuration = resolve_choices(load_case_, plan_run(load_case_, planned_contact_half_width), near_field);
   }
   build(configuration);
@@ -73,6 +78,7 @@ void Simulation::build(const RunConfiguration& configuration, const std::optiona
                        *violation);
   }
   config_ = configuration;
+  control_ = LoadControl::of(load_case_);
   const MeshPlan& plan = config_.plan.mesh;
   const PhaseTimes::Scope timing = times_.measure("model");
   mesh_ = std::make_unique<Mesh>(Mesh::from_plan(load_case_, plan));
@@ -155,10 +161,10 @@ void Simulation::run(const std::function<void(const IncrementRecord&)>& on_incre
 IncrementRecord Simulation::advance_to(double target) {
   const PhaseTimes::Scope timing = times_.measure("stepping");
   const auto start = std::chrono::steady_clock::now();
-  anticipate_plastic_zone(target);
+  anticipate_plastic_zone(expected_depth(target));
   SolveCounters counters;
   int cutbacks = 0;
-  double step = target - state_.alpha;
+  double step = target - control_->committed(state_);
   // The state of the last reported increment, saved before a converged sub-step (after a
   // cutback) moves the simulation past it: an interruption returns to it.
   std::optional<SimulationState> reported;
@@ -178,32 +184,36 @@ IncrementRecord Simulation::advance_to(double target) {
   };
   for (;;) {
     stop_if_requested();
-    double trial = state_.alpha + step;
+    double trial = control_->committed(state_) + step;
     if (std::abs(target - trial) <= 1e-12 * std::abs(target)) trial = target;
     if (solve_at(trial, counters, stop_if_requested)) {
       if (trial != target && !reported) reported = state();
       from_system(system_guess_, guess_);
-      if (grow_near_field(guess_, trial)) {
+      const double depth = solved_depth(trial);
+      if (grow_near_field(guess_, depth)) {
         ++near_field_growths_;
         build_system();
-        continue;  // the same trial depth on the larger near field
+        continue;  // the same trial on the larger near field
       }
-      commit(trial);
+      commit(trial, depth);
       if (trial == target) break;
       // Grow the sub-step back after an easy one.
       if (last_report_.iterations <= 3) step *= 2.0;
-      step = std::copysign(std::min(std::abs(step), std::abs(target - state_.alpha)), target - state_.alpha);
+      const double rest = target - control_->committed(state_);
+      step = std::copysign(std::min(std::abs(step), std::abs(rest)), rest);
       continue;
     }
     if (cutbacks >= load_case_.solver.max_cutbacks) {
       const NewtonReport report = last_report_;  // a copy: returning to the reported state may rebuild the system
+      const std::string limit = limit_load_note();  // of the sub-steps that converged, before they are undone
       return_to_reported();
       const std::optional<std::string> cause = report.cycling ? contact_->known_cycling_cause() : std::nullopt;
       throw SolverError(fmt::format(
-          "the increment from alpha = {:.6g} m to {:.6g} m did not converge after {} cutbacks (last try: "
-          "alpha = {:.6g} m, {} Newton iterations, scaled residual {:.3g}, KINSOL flag {}{}{}){}{}",
-          state_.alpha, target, cutbacks, trial, report.iterations, report.residual, report.kinsol_flag,
-          report.message.empty() ? "" : ": ", report.message, cause ? ": " : "", cause ? *cause : ""));
+          "the increment from {} to {} did not converge after {} cutbacks (last try: {}, {} Newton iterations, "
+          "scaled residual {:.3g}, KINSOL flag {}{}{}){}{}{}",
+          control_->describe(control_->committed(state_)), control_->describe(target), cutbacks,
+          control_->describe(trial), report.iterations, report.residual, report.kinsol_flag,
+          report.message.empty() ? "" : ": ", report.message, cause ? ": " : "", cause ? *cause : "", limit));
     }
     step *= 0.5;
     ++cutbacks;
@@ -229,9 +239,10 @@ IncrementRecord Simulation::advance_to(double target) {
 bool Simulation::solve_at(double trial, SolveCounters& counters, const std::function<void()>& stop_if_requested) {
   // Laws that follow the global load history (Ilyushin's unloading rule) need to know whether
   // this trial goes beyond the deepest point so far.
-  if (plastic_) plastic_->set_loading(trial >= state_.deepest);
+  if (plastic_) plastic_->set_loading(control_->loads(state_, trial));
   // Friction's slip is measured from the committed state this (sub-)increment starts from.
   hold_committed_contact_state(state_.u);
+  if (controlled_ && trial <= 0.0) return solve_released(counters);
   const int plain_budget = std::max(8, load_case_.solver.max_newton / 4);
   for (Globalization g : {Globalization::line_search, Globalization::none}) {
     if (g == Globalization::line_search || !last_report_.stopped_while_converging)
@@ -248,16 +259,17 @@ bool Simulation::solve_at(double trial, SolveCounters& counters, const std::func
 // A converged trial becomes the state: the displacement (guess_, already mapped from the Newton
 // system), the depth, and the material history, which moves with every converged (sub-)step.
 void Simulation::take_committed_branch() {
-  if (plastic_) plastic_->set_loading(state_.alpha >= state_.deepest);
+  if (plastic_) plastic_->set_loading(control_->loads(state_, control_->committed(state_)));
 }
 
-void Simulation::commit(double trial) {
+void Simulation::commit(double trial, double depth) {
   state_.u_previous.swap(state_.u);
   state_.u.swap(guess_);
   state_.residual_scale_previous = state_.residual_scale;
   state_.residual_scale = settings_.force_scale;
   state_.alpha_previous = state_.alpha;
-  state_.alpha = trial;
+  state_.alpha = depth;
+  control_->commit(state_, trial);
   state_.has_previous = true;
   state_.deepest = std::max(state_.deepest, state_.alpha);
   largest_condition_ = std::max(largest_condition_, last_report_.condition_estimate);
@@ -273,28 +285,139 @@ void Simulation::predict(double trial, long& iterations, long& factorizations) {
   // any shallower depth (and is the best start for a deeper one), where the secant would go on
   // with the springback of the increment that released it (the Berkovich cone: 8 Newton
   // iterations for an increment with nothing to solve).
-  if (state_.has_previous && !virgin && !clear_of_punch())
-    extrapolate(state_.u_previous, state_.alpha_previous, state_.u, state_.alpha, trial, guess_);
-  else
+  // The secant runs in the controlled quantity; under force control the depth is extrapolated
+  // along with u.
+  const double now = control_->predictor_coordinate(control_->committed(state_));
+  const double before = control_->predictor_coordinate(control_->previous(state_));
+  const double next = control_->predictor_coordinate(trial);
+  double depth = trial;
+  if (state_.has_previous && !virgin && !clear_of_punch()) {
+    extrapolate(state_.u_previous, before, state_.u, now, next, guess_);
+    if (controlled_)
+      depth = now != before ? state_.alpha + (next - now) / (now - before) * (state_.alpha - state_.alpha_previous)
+                            : state_.alpha;
+  } else {
     guess_ = state_.u;
-  to_system(guess_, system_guess_);
-  if (!virgin || !plastic_) return;
-  // The elastic contact solution at the same depth settles the contact set before plasticity
-  // enters, which the coupled Newton otherwise has to find through the kinks of both at once.
-  equations_->use_bulk(system_elastic_bulk());
-  const NewtonReport elastic = newton_->solve(trial, system_guess_);
-  equations_->use_bulk(system_bulk());
-  if (const int signal = interruption_requested()) throw Interrupted(signal);  // nothing committed yet
-  iterations += elastic.iterations;
-  factorizations += elastic.factorizations;
-  if (!elastic.converged) to_system(state_.u, system_guess_);
+    if (controlled_) depth = first_depth_guess(trial);
+  }
+  to_system(guess_, depth, system_guess_);
+  if (virgin && plastic_) {
+    // The elastic contact solution at the same depth settles the contact set before plasticity
+    // enters, which the coupled Newton otherwise has to find through the kinks of both at once.
+    equations_->use_bulk(system_elastic_bulk());
+    const NewtonReport elastic = solve_at_depth(depth, system_guess_, Globalization::none);
+    equations_->use_bulk(system_bulk());
+    if (const int signal = interruption_requested()) throw Interrupted(signal);  // nothing committed yet
+    iterations += elastic.iterations;
+    factorizations += elastic.factorizations;
+    if (!elastic.converged) to_system(state_.u, depth, system_guess_);
+  }
+  if (!controlled_) return;
+  // Force control: the state at the predicted depth first.  The bordered Newton moves the depth,
+  // and with it every contact row and Gauss point near its kink, at each iteration; from the
+  // predicted depth's own solution it only has the depth's small correction left (on the
+  // Berkovich cone, J2, 20 increments: 3.2 times the Newton iterations of depth control without
+  // this step; docs/performance.md).
+  // (A stop requested meanwhile fails this solve and the bordered one at their first residual;
+  // solve_at then returns to the reported state.)
+  std::vector<double> settled = system_guess_;
+  const NewtonReport at_depth = solve_at_depth(depth, settled, Globalization::line_search);
+  iterations += at_depth.iterations;
+  factorizations += at_depth.factorizations;
+  if (at_depth.converged) system_guess_.swap(settled);
+}
+
+NewtonReport Simulation::solve_at_depth(double depth, std::vector<double>& x, Globalization globalization) {
+  if (!controlled_) return newton_->solve(depth, x, globalization);
+  if (!depth_newton_) depth_newton_ = std::make_unique<NewtonSolver>(*equations_, settings_);
+  x.pop_back();
+  const NewtonReport report = depth_newton_->solve(depth, x, globalization);
+  x.push_back(depth);
+  return report;
+}
+
+double Simulation::expected_depth(double target) const { return indentsim::expected_depth(load_case_, target); }
+
+double Simulation::first_depth_guess(double trial) const {
+  if (!(state_.deepest > 0.0 && state_.largest_force > 0.0)) return expected_depth(trial);
+  // Reloading an imprint: up the unloading curve from where the punch touches it (at the imprint's
+  // depth) to the peak (at the deepest depth), along the shape's power law, and on beyond the peak
+  // as the virgin curve would.
+  const double touch = touch_depth();
+  if (trial <= state_.largest_force)
+    return touch + (state_.deepest - touch) *
+                       std::pow(trial / state_.largest_force, 1.0 / force_exponent(load_case_.punch.shape));
+  return state_.deepest + expected_depth(trial) - expected_depth(state_.largest_force);
+}
+
+double Simulation::touch_depth() const { return touch_depth_of(state_.u); }
+
+double Simulation::touch_depth_of(const std::vector<double>& u) const {
+  double depth = std::numeric_limits<double>::infinity();
+  for (const auto& c : contact_->candidates()) depth = std::min(depth, c.surface_height - u[c.equation]);
+  return depth;
+}
+
+double Simulation::solved_depth(double trial) const { return controlled_ ? system_guess_.back() : trial; }
+
+bool Simulation::solve_released(SolveCounters& counters) {
+  // Off the punch the force is 0 at every depth above the surface: the specimen's state is solved
+  // with the punch held clear of it (a depth below the original surface by the deepest depth,
+  // which no pile-up reaches), and the increment ends where the punch just touches it.
+  const double clear = -load_case_.max_depth();
+  std::vector<double> u_system;
+  to_system(state_.u, clear, u_system);
+  last_report_ = solve_at_depth(clear, u_system, Globalization::line_search);
+  counters.iterations += last_report_.iterations;
+  counters.factorizations += last_report_.factorizations;
+  if (!last_report_.converged) return false;
+  std::vector<double> u;
+  from_system(u_system, u);
+  if (contact_->touches(u.data(), clear)) {
+    last_report_.converged = false;
+    last_report_.message = "the released specimen's surface rises above the punch held clear of it";
+    return false;
+  }
+  // The deepest depth at which the punch still clears the surface, to 1e-10 of the path's depth:
+  // the contact's own test (in finite strain the gap is measured at the nodes' current abscissa),
+  // bisected from min_k (g_k - v_k), where it touches at the reference abscissae.
+  const double resolution = 1e-10 * load_case_.max_depth();
+  double below = clear, above = touch_depth_of(u);
+  if (!contact_->touches(u.data(), above - resolution)) {
+    below = above - resolution;
+  } else {
+    while (above - below > resolution) {
+      const double middle = 0.5 * (below + above);
+      (contact_->touches(u.data(), middle) ? above : below) = middle;
+    }
+  }
+  // A surface that sprang back to the original level (an elastic specimen) is touched at alpha = 0,
+  // where the path starts: the depth is never negative.
+  to_system(u, std::max(0.0, below), system_guess_);
+  return true;
+}
+
+std::string Simulation::limit_load_note() const {
+  if (!controlled_ || !state_.has_previous || !(state_.alpha > state_.alpha_previous) || !(state_.force > 0.0))
+    return "";
+  // A force that stops rising with the depth is a limit load: P(alpha) has no point beyond it.
+  const double tangent = (state_.force - state_.force_previous) / (state_.alpha - state_.alpha_previous);
+  const double ratio = tangent / (state_.force / state_.alpha);
+  if (ratio > limit_tangent_ratio) return "";
+  return fmt::format("; the largest force reached is {} at alpha = {:.6g} m, where dP/dalpha fell to {:.2g} of P / alpha: "
+                     "the force approaches a limit load of the specimen, which force control cannot pass (a "
+                     "depth-controlled run, load.control = \"depth\", follows the curve beyond it)",
+                     control_->describe(state_.largest_force), state_.alpha, ratio);
 }
 
 bool Simulation::clear_of_punch() const { return !contact_->touches(state_.u.data(), state_.alpha); }
 
 void Simulation::build_system() {
   if (newton_) retired_symbolic_analyses_ += newton_->total_symbolic_analyses();
+  if (depth_newton_) retired_symbolic_analyses_ += depth_newton_->total_symbolic_analyses();
   newton_.reset();
+  depth_newton_.reset();
+  controlled_.reset();
   equations_.reset();
   condensed_bulk_.reset();
   condensed_elastic_.reset();
@@ -309,7 +432,9 @@ void Simulation::build_system() {
     equations_ = std::make_unique<ContactEquations>(*pattern_, *bulk_, *stiffness_, *contact_);
   }
   settings_.linear = config_.linear_solver;
-  newton_ = std::make_unique<NewtonSolver>(*equations_, settings_);
+  controlled_ = control_->system_equations(*equations_, system_contact(), settings_.force_scale);
+  newton_ = std::make_unique<NewtonSolver>(controlled_ ? *controlled_ : static_cast<IncrementEquations&>(*equations_),
+                                           settings_);
 }
 
 BulkOperator& Simulation::system_bulk() {
@@ -330,9 +455,18 @@ void Simulation::to_system(const std::vector<double>& u, std::vector<double>& u_
   else u_system = u;
 }
 
-void Simulation::from_system(const std::vector<double>& u_system, std::vector<double>& u) const {
-  if (condensation_) condensation_->expand(u_system, u);
-  else u = u_system;
+void Simulation::to_system(const std::vector<double>& u, double alpha, std::vector<double>& x) const {
+  to_system(u, x);
+  if (controlled_) x.push_back(alpha);
+}
+
+void Simulation::from_system(const std::vector<double>& x, std::vector<double>& u) const {
+  if (condensation_) {
+    condensation_->expand(x, u);  // reads the near field's unknowns only
+  } else {
+    u = x;
+    u.resize(static_cast<std::size_t>(mesh_->equations()));  // drops force control's depth
+  }
 }
 
 // The near field for the plastic zone the pilot saw at twice `depth` (at most the deepest point of
@@ -521,6 +655,8 @@ std::optional<Simulation::Sensitivities> Simulation::sensitivities(const std::ve
   for (MaterialParameter p : parameters)
     if (p == MaterialParameter::nu) return std::nullopt;  // nu also shapes the condensed far field
   if (contact_->carries_history()) return std::nullopt;  // friction's slip history: its derivative is not carried
+  // At fixed force the depth moves with theta too: the derivatives at fixed depth are not built.
+  if (controlled_) return std::nullopt;
   std::vector<double> u_system;
   to_system(state_.u, u_system);
   const std::size_t n = u_system.size();
@@ -651,7 +787,7 @@ IncrementRecord Simulation::record(double wall_seconds, long iterations, long fa
   check_fine_zone(r.half_width);
   // Resolution is judged where the contact is largest, at the deepest point of the path (a history
   // that unloads ends with no contact, which says nothing about the mesh).
-  if (state_.alpha == load_case_.max_depth() && c.force > 0.0 && c.contact_nodes < 4) {
+  if (control_->committed(state_) == load_case_.load.largest_target() && c.force > 0.0 && c.contact_nodes < 4) {
     const std::string coarse = fmt::format("the contact zone spans only {} node(s) at the deepest point: the result "
                                            "is coarse; raise mesh.contact_nodes",
                                            c.contact_nodes);

@@ -27,7 +27,9 @@ namespace indentsim {
 // largest far-field gradient; 8: the case as run names finite strain's elastic stress
 // (material.elastic_stress): a format-7 finite-strain run took the Kirchhoff stress = D : e, which
 // its case does not say, so it is not read as a Cauchy run.
-constexpr std::uint32_t checkpoint_format_version = 8;
+// 9: the state holds force control's forces (the target converged to, the one before, the
+// largest).
+constexpr std::uint32_t checkpoint_format_version = 9;
 
 struct Checkpoint {
   std::string load_case_toml;            ///< to_toml() of the load case as run

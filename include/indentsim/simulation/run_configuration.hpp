@@ -23,7 +23,16 @@ struct RunPlan {
   MeshPlan mesh;
   PlasticZoneGrowth plastic_zone;  ///< from the pilot, sizes the condensed near field as it grows
 };
+/// Throws std::invalid_argument for a force-controlled case without its depth estimate
+/// (with_depth_estimate gives it).
 RunPlan plan_run(const LoadCase& load_case, std::optional<double> planned_contact_half_width = std::nullopt);
+
+/// Force control (docs/MODEL.md §13.1): the case with load.depth_estimate, the depth its largest
+/// force reaches, measured by coarse depth-controlled pilot runs when the case does not give it;
+/// any other case as it is.  The depth stays within half the block, half a sphere's radius and
+/// half a profile's height, where the depth checks of the case hold (a force beyond what the
+/// specimen carries there meets its limit in the run, which names it).
+LoadCase with_depth_estimate(LoadCase load_case);
 
 struct RunConfiguration {
   RunPlan plan;                        ///< the mesh (and the pilot's plastic zone)

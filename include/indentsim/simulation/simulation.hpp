@@ -15,6 +15,7 @@
 #include "indentsim/solvers/layer_forces.hpp"
 #include "indentsim/input/load_case.hpp"
 #include "indentsim/simulation/increment_snapshot.hpp"
+#include "indentsim/simulation/load_control.hpp"
 #include "indentsim/simulation/load_stepping.hpp"
 #include "indentsim/simulation/run_configuration.hpp"
 #include "indentsim/simulation/simulation_state.hpp"
@@ -62,8 +63,11 @@ public:
   /// within the allowed cutbacks; the increments reported before stay valid.
   void run(const std::function<void(const IncrementRecord&)>& on_increment = {});
 
-  /// Solves one increment from the current state to depth `alpha` (with cutbacks).
-  IncrementRecord advance_to(double alpha);
+  /// Solves one increment from the current state to `target` of the load control: a depth
+  /// alpha, or a force P (with cutbacks).
+  IncrementRecord advance_to(double target);
+  /// What the load path steps (load.control).
+  const LoadControl& load_control() const { return *control_; }
 
   /// The run state, with the bulk model's material history and the contact set filled in.
   SimulationState state() const;
@@ -122,7 +126,8 @@ public:
   /// The force part of sensitivities().
   std::optional<std::vector<double>> force_sensitivities(const std::vector<MaterialParameter>& parameters);
   long symbolic_analyses() const {
-    return retired_symbolic_analyses_ + (newton_ ? newton_->total_symbolic_analyses() : 0);
+    return retired_symbolic_analyses_ + (newton_ ? newton_->total_symbolic_analyses() : 0) +
+           (depth_newton_ ? depth_newton_->total_symbolic_analyses() : 0);
   }
   /// The largest condition estimate of any converged increment's Jacobian so far.
   double largest_condition_estimate() const { return largest_condition_; }
@@ -155,16 +160,39 @@ private:
   struct SolveCounters {
     long iterations = 0, factorizations = 0;
   };
-  /// The Newton solve at depth `trial` with its globalisation ladder; true if it converged.
+  /// The Newton solve at `trial` of the load control with its globalisation ladder; true if it
+  /// converged (the solution in system_guess_).
   bool solve_at(double trial, SolveCounters& counters, const std::function<void()>& stop_if_requested);
-  /// Makes the converged trial (in guess_) the current state.
-  void commit(double trial);
+  /// Force control's target 0: the specimen off the punch, solved at a depth clear of it and
+  /// reported where the punch just touches it (touch_depth).
+  bool solve_released(SolveCounters& counters);
+  /// The Newton solve at fixed depth from x (the Newton system's unknowns, under force control
+  /// with the depth last, which is set to `depth`).
+  NewtonReport solve_at_depth(double depth, std::vector<double>& x, Globalization globalization);
+  /// The depth of a converged system solution: the unknown under force control, else `trial`.
+  double solved_depth(double trial) const;
+  /// Makes the converged trial (in guess_, at depth `depth`) the current state.
+  void commit(double trial, double depth);
   /// Sets the law's branch to the committed state's: Ilyushin's loading flag is set for each trial
   /// (solve_at), and at a committed state it is alpha >= deepest.
   void take_committed_branch();
   IncrementRecord record(double wall_seconds, long iterations, long factorizations, int cutbacks);
-  /// Initial guess for depth `trial` into guess_ (counts any solve it needs).
+  /// Initial guess for `trial` of the load control into guess_ and system_guess_ (counts any solve
+  /// it needs).
   void predict(double trial, long& iterations, long& factorizations);
+  /// Force control: a first depth for target force `trial` where the state has none to
+  /// extrapolate (a virgin specimen, or one off the punch).
+  double first_depth_guess(double trial) const;
+  /// The depth at which the punch first touches the committed surface, min_k (g_k - v_k) at the
+  /// candidates' reference abscissae; of a whole-mesh displacement u.
+  double touch_depth() const;
+  double touch_depth_of(const std::vector<double>& u) const;
+  /// The depth an increment to `target` is expected to reach: the target itself under depth
+  /// control; under force control the depth estimate scaled by the punch's force exponent.
+  double expected_depth(double target) const;
+  /// Under force control, why a failed increment failed if the force has reached a limit load
+  /// (dP/dalpha small against P / alpha), as the tail of its message; "" otherwise.
+  std::string limit_load_note() const;
   /// Every surface node of the committed state strictly below the punch (no contact, no load).
   bool clear_of_punch() const;
   void check_fine_zone(double half_width);
@@ -180,6 +208,9 @@ private:
   void hold_committed_contact_state(const std::vector<double>& u);
   /// The Newton system's residual at the whole-mesh displacement u, max |F_i| / force_scale.
   double system_residual(const std::vector<double>& u, double alpha, double force_scale);
+  /// The Newton system's unknowns of a whole-mesh displacement u at depth alpha (alpha appended
+  /// under force control), and back.
+  void to_system(const std::vector<double>& u, double alpha, std::vector<double>& x) const;
   void to_system(const std::vector<double>& u, std::vector<double>& u_system) const;
   void from_system(const std::vector<double>& u_system, std::vector<double>& u) const;
   /// In a condensed run: grows the near field if the converged full solution `u` at depth `alpha` breaks the
@@ -199,8 +230,11 @@ private:
   NewtonSettings settings_;
   std::unique_ptr<FarFieldCondensation> condensation_;      // null when the whole mesh is solved
   std::unique_ptr<CondensedBulk> condensed_bulk_, condensed_elastic_;
-  std::unique_ptr<ContactEquations> equations_;
+  std::unique_ptr<ContactEquations> equations_;             // at fixed depth
+  std::unique_ptr<IncrementEquations> controlled_;          // force control's bordered system, else null
   std::unique_ptr<NewtonSolver> newton_;                    // null until the system is built
+  std::unique_ptr<NewtonSolver> depth_newton_;              // force control's solves at fixed depth (built when needed)
+  std::unique_ptr<LoadControl> control_;
   long retired_symbolic_analyses_ = 0;                      // of systems replaced by a larger near field
   int near_field_growths_ = 0;
   int near_field_rebuilds_ = 0;

@@ -18,6 +18,9 @@ struct SimulationState {
   double alpha_previous = 0.0;  ///< the one before (the predictor's)
   double deepest = 0.0;         ///< the largest converged depth so far (the load path's peak)
   bool has_previous = false;    ///< alpha_previous and u_previous hold a converged state
+  /// Force control (load_control.hpp): the target force the state converged to, the one before
+  /// and the largest so far [N or N/m]; 0 under depth control.
+  double force = 0.0, force_previous = 0.0, largest_force = 0.0;
   /// The force scale Newton measured the residual on when u (u_previous) converged: a resumed
   /// run checks the state against it (a branch to a shallower path scales its own increments
   /// smaller).
@@ -45,6 +48,9 @@ void visit_fields(State& s, Visitor&& visit) {
   visit("alpha_previous", s.alpha_previous, "the state");
   visit("deepest", s.deepest, "the state");
   visit("has_previous", s.has_previous, "the state");
+  visit("force", s.force, "the state");
+  visit("force_previous", s.force_previous, "the state");
+  visit("largest_force", s.largest_force, "the state");
   visit("residual_scale", s.residual_scale, "the state");
   visit("residual_scale_previous", s.residual_scale_previous, "the state");
   visit("rows", s.rows, "the state");
