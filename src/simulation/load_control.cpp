@@ -21,7 +21,6 @@ public:
   bool loads(const SimulationState& s, double trial) const override { return trial >= s.deepest; }
   double predictor_coordinate(double value) const override { return value; }
   void commit(SimulationState&, double) const override {}
-  double of_row(const IncrementRecord& row) const override { return row.alpha; }
   bool at_target(const IncrementRecord& row, double target, double, double) const override {
     return row.alpha == target;
   }
@@ -46,11 +45,10 @@ public:
     s.force = trial;
     s.largest_force = std::max(s.largest_force, trial);
   }
-  double of_row(const IncrementRecord& row) const override { return row.force; }
   bool at_target(const IncrementRecord& row, double target, double largest, double tolerance) const override {
-    // ForceControlledEquations lands P within the tolerance of max(target, largest / 100); the
+    // ForceControlledEquations lands P within the tolerance of force_control_reference; the
     // factor 2 leaves room for the rounding of the force recomputed from the state.
-    return std::abs(row.force - target) <= 2.0 * tolerance * std::max(target, 1e-2 * largest);
+    return std::abs(row.force - target) <= 2.0 * tolerance * force_control_reference(target, largest);
   }
   std::unique_ptr<IncrementEquations> system_equations(ContactEquations& equations,
                                                        const ContactDiscretization& contact,

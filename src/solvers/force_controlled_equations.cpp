@@ -74,8 +74,8 @@ ForceControlledEquations::ForceControlledEquations(ContactEquations& depth_contr
   internal_force_.assign(static_cast<std::size_t>(n), 0.0);
 }
 
-double ForceControlledEquations::reference_force(double target) const {
-  return std::max(target, 1e-2 * largest_force_);
+double force_control_reference(double target, double largest_force) {
+  return std::max(target, 1e-2 * largest_force);
 }
 
 void ForceControlledEquations::residual(const double* x, double target, double* f) {
@@ -87,8 +87,10 @@ void ForceControlledEquations::residual(const double* x, double target, double* 
   const auto& rows = contact_.row_equations();
   const auto& row_force = depth_controlled_.contact_row_forces();
   for (std::size_t i = 0; i < rows.size(); ++i) internal_force_[static_cast<std::size_t>(rows[i])] = row_force[i];
-  const double force = contact_.evaluate(x, internal_force_.data(), alpha).force;
-  f[n] = (force - target) * force_scale_ / reference_force(target);
+  const ContactResult state = contact_.evaluate(x, internal_force_.data(), alpha);
+  residual_x_.assign(x, x + n + 1);
+  residual_in_contact_ = state.in_contact;
+  f[n] = (state.force - target) * force_scale_ / force_control_reference(target, largest_force_);
 }
 
 void ForceControlledEquations::embed(const std::vector<double>& inner, double* values) const {
@@ -109,12 +111,15 @@ void ForceControlledEquations::jacobian(const double* x, double target, double* 
   for (std::size_t i = 0; i < rows.size(); ++i)
     values[border_column_[i]] = internal_force_[static_cast<std::size_t>(rows[i])];
   // The force row: P = -f sum over the candidates in contact of their internal force.
-  for (std::size_t i = 0; i < rows.size(); ++i) internal_force_[static_cast<std::size_t>(rows[i])] = row_force[i];
-  const ContactResult state = contact_.evaluate(x, internal_force_.data(), alpha);
-  const double weight = -contact_.symmetry_factor() * force_scale_ / reference_force(target);
+  if (!std::equal(x, x + n + 1, residual_x_.begin(), residual_x_.end())) {
+    for (std::size_t i = 0; i < rows.size(); ++i) internal_force_[static_cast<std::size_t>(rows[i])] = row_force[i];
+    residual_x_.assign(x, x + n + 1);
+    residual_in_contact_ = contact_.evaluate(x, internal_force_.data(), alpha).in_contact;
+  }
+  const double weight = -contact_.symmetry_factor() * force_scale_ / force_control_reference(target, largest_force_);
   const auto& bulk_rows = depth_controlled_.bulk_rows();
   for (std::size_t k = 0; k < force_row_.size(); ++k) {
-    if (!state.in_contact[k]) continue;
+    if (!residual_in_contact_[k]) continue;
     for (std::size_t p = 0; p < force_row_[k].size(); ++p) values[force_row_[k][p].first] += weight * bulk_rows[k][p];
   }
 }

@@ -45,8 +45,6 @@ public:
   virtual double predictor_coordinate(double value) const = 0;
   /// The control's own part of a committed trial: the force and the largest force so far.
   virtual void commit(SimulationState& state, double trial) const = 0;
-  /// The controlled quantity of a converged row.
-  virtual double of_row(const IncrementRecord& row) const = 0;
   /// Whether a row lies at its planned target: bit for bit for a depth (it is the target); for
   /// a force to the Newton tolerance relative to `largest` (the path's largest force).
   virtual bool at_target(const IncrementRecord& row, double target, double largest, double tolerance) const = 0;

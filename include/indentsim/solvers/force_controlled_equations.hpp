@@ -24,6 +24,11 @@
 
 namespace indentsim {
 
+/// The force P_ref against which force control's equation is scaled: the target, and no less than
+/// 1 % of the path's largest force (so that a target near zero is not asked for to a tolerance
+/// relative to itself).  Newton lands P within its tolerance times this.
+double force_control_reference(double target, double largest_force);
+
 class ForceControlledEquations : public IncrementEquations {
 public:
   /// `depth_controlled` are the equations at fixed depth (their contact discretization `contact`),
@@ -38,11 +43,7 @@ public:
   bool pivot_reference(double* values) override;
   bool symmetric_but_pinned_rows() const override { return false; }
 
-  /// The unknowns of the depth-controlled system (the last unknown here is alpha).
-  std::int64_t depth_controlled_size() const { return depth_controlled_.size(); }
-
 private:
-  double reference_force(double target) const;
   /// Copies values of the depth-controlled pattern into this one's positions (border zeroed).
   void embed(const std::vector<double>& inner, double* values) const;
 
@@ -57,6 +58,10 @@ private:
   // row, and the inner positions of (k, j) that hold K_t(k, j).
   std::vector<std::vector<std::pair<std::int64_t, std::int64_t>>> force_row_;
   std::vector<double> inner_values_, internal_force_;
+  // The candidates in contact at the last residual, and the x it was evaluated at: KINSOL evaluates
+  // F(x) before J(x), so the force row reuses them instead of a second contact evaluation.
+  std::vector<double> residual_x_;
+  std::vector<char> residual_in_contact_;
 };
 
 }  // namespace indentsim

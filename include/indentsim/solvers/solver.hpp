@@ -71,7 +71,6 @@ public:
   bool pivot_reference(double* values) override;
   bool symmetric_but_pinned_rows() const override { return contact_.rows_keep_symmetry(); }
 
-  const ContactDiscretization& contact() const { return contact_; }
   /// The internal force on each contact row (row_equations() order) at the u of the last residual
   /// or Jacobian evaluated.
   const std::vector<double>& contact_row_forces() const { return residual_contact_force_; }
