@@ -37,20 +37,32 @@ struct PilotResult {
   PlasticZoneGrowth plastic_zone;
 };
 
-PilotResult pilot_run(const LoadCase& lc) {
-  const double depth = lc.max_depth();
-  // Where the punch meets the undeformed surface: the sphere's chord sqrt(2 R alpha - alpha^2).
-  const double chord = make_punch(lc.punch)->geometric_contact_radius(depth);
+// The coarse pilot of both pilots below: the case pressed to `depth` under depth control in 4
+// increments, on a default mesh with 8 elements across the punch's chord (where the punch meets
+// the undeformed surface: the sphere's sqrt(2 R alpha - alpha^2); a flat punch's own half-width
+// is its mesh's), solved whole, without an error estimate, to a tolerance no finer than 1e-9.
+LoadCase coarse_pilot_case(const LoadCase& lc, double depth) {
   LoadCase pilot = lc;
-  pilot.mesh = MeshInput{};
-  pilot.mesh.contact_nodes = 8;
-  pilot.mesh.contact_half_width = chord;
   pilot.load.control = LoadControlKind::depth;  // under force control too: to the depth estimate
   pilot.load.depth_estimate.reset();
   pilot.load.path = {0.0, depth};
   pilot.load.increments = 4;
+  pilot.load.segment_increments.clear();
+  pilot.mesh = MeshInput{};
+  pilot.mesh.contact_nodes = 8;
+  pilot.mesh.error_estimate = ErrorEstimateChoice::off;
+  if (lc.punch.shape != PunchShapeKind::flat)
+    pilot.mesh.contact_half_width = make_punch(lc.punch)->geometric_contact_radius(depth);
   pilot.solver.tolerance = std::max(lc.solver.tolerance, 1e-9);
   pilot.solver.far_field = FarFieldChoice::full;
+  return pilot;
+}
+
+PilotResult pilot_run(const LoadCase& lc) {
+  const double depth = lc.max_depth();
+  const double chord = make_punch(lc.punch)->geometric_contact_radius(depth);
+  LoadCase pilot = coarse_pilot_case(lc, depth);
+  pilot.mesh.contact_half_width = chord;  // a flat punch's too: the pilot plans no pilot of its own
   double widest = 0.0;
   try {
     Simulation sim(pilot);
@@ -76,8 +88,8 @@ PilotResult pilot_run(const LoadCase& lc) {
   }
 }
 
-// The depth pilot of force control.  P(alpha) is measured on a coarse mesh (8 elements across the
-// punch's chord, 4 increments, the whole mesh solved) up to a trial depth, and the depth is
+// The depth pilot of force control.  P(alpha) is measured on a coarse mesh (coarse_pilot_case) up
+// to a trial depth, and the depth is
 // rescaled along the curve's own power law at its end, alpha <- alpha (P_max / P)^(1/m) with
 // m = d ln P / d ln alpha from its last two increments, until it moves by less than 2%.  It starts
 // from a depth of the punch's own scale and moves by a factor 10 at most per pilot; near a limit
@@ -94,19 +106,7 @@ struct DepthPilot {
 };
 
 DepthPilot depth_pilot(const LoadCase& lc, double depth) {
-  LoadCase pilot = lc;
-  pilot.load.control = LoadControlKind::depth;
-  pilot.load.depth_estimate.reset();
-  pilot.load.path = {0.0, depth};
-  pilot.load.increments = 4;
-  pilot.load.segment_increments.clear();
-  pilot.mesh = MeshInput{};
-  pilot.mesh.contact_nodes = 8;
-  pilot.mesh.error_estimate = ErrorEstimateChoice::off;
-  if (lc.punch.shape != PunchShapeKind::flat)
-    pilot.mesh.contact_half_width = make_punch(lc.punch)->geometric_contact_radius(depth);
-  pilot.solver.tolerance = std::max(lc.solver.tolerance, 1e-9);
-  pilot.solver.far_field = FarFieldChoice::full;
+  LoadCase pilot = coarse_pilot_case(lc, depth);
   pilot.solver.linear = LinearSolverChoice::klu;
   Simulation sim(pilot);
   std::vector<IncrementRecord> rows;

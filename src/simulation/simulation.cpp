@@ -637,11 +637,7 @@ void Simulation::restore(const SimulationState& s) {
     throw std::invalid_argument("the saved contact set does not follow from the saved displacement");
 }
 
-double Simulation::free_surface_depth() const {
-  double depth = -std::numeric_limits<double>::infinity();
-  for (const auto& c : contact_->candidates()) depth = std::max(depth, -state_.u[c.equation] - c.surface_height);
-  return depth;
-}
+double Simulation::free_surface_depth() const { return touch_depth(); }
 
 std::optional<std::vector<double>> Simulation::force_sensitivities(const std::vector<MaterialParameter>& parameters) {
   std::optional<Sensitivities> s = sensitivities(parameters);

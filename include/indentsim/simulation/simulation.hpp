@@ -99,8 +99,8 @@ public:
   double unloading_stiffness() const;
   /// The same of a contact state `c` evaluated at the current state.
   double unloading_stiffness(const ContactResult& c) const;
-  /// The depth at which the punch would first touch the current surface, max_k (-v_k - g(x_k)):
-  /// after separation, the residual depth of the imprint where the punch left it.
+  /// The depth at which the punch would first touch the current surface (touch_depth): after
+  /// separation, the residual depth of the imprint where the punch left it.
   double free_surface_depth() const;
   std::vector<LayerForce> layer_forces() const;
   /// dP/d(theta) and du/d(theta) at the current state for each parameter, by forward sensitivity
