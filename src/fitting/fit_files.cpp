@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 #include <toml++/toml.h>
 
+#include "indentsim/fitting/forward_model.hpp"
 #include "indentsim/input/csv_table.hpp"
 #include "indentsim/base/error.hpp"
 #include "indentsim/base/file_system.hpp"
@@ -320,10 +321,7 @@ FitJob read_fit_job(const FitCommandLine& cl) {
   std::size_t points = 0;
   for (const auto& d : problem.data) {
     // The forward model steps the data's depths (forward_model.cpp says so too).
-    if (d.load_case.load.control == LoadControlKind::force)
-      throw InputError(d.load_case.source, "load.control",
-                       "the fit runs its forward model under depth control at the data's depths: give the case with "
-                       "load.control = \"depth\" (fitting a force-controlled protocol is not built yet)");
+    refuse_unfittable_load(d.load_case);
     points += d.values.size();
     if (d.kind == FitDataKind::force_depth_curve)
       for (std::size_t i = 0; i < d.abscissa.size(); ++i)

@@ -79,6 +79,19 @@ std::optional<double> local_value(const std::vector<double>& x, const std::vecto
 
 }  // namespace
 
+void refuse_unfittable_load(const LoadCase& lc) {
+  // A force-controlled forward model (the protocol of a load-controlled instrument) is not built
+  // yet (docs/MODEL.md §13).
+  if (lc.load.control == LoadControlKind::force)
+    throw InputError(lc.source, "load.control",
+                     "the fit runs its forward model under depth control at the data's depths: give the case with "
+                     "load.control = \"depth\" (fitting a force-controlled protocol is not built yet)");
+  if (!lc.load.times.empty())
+    throw InputError(lc.source, "load.times",
+                     "the fit runs its forward model along the data's depths, not along the case's path in time: "
+                     "leave load.times out of the fit's case (no material model depends on the rate yet)");
+}
+
 CurveReduction reduce_to_resolution(FitData& data) {
   CurveReduction r;
   r.rows = r.points = data.abscissa.size();
@@ -177,12 +190,7 @@ ForwardModel::ForwardModel(FitData data, std::vector<MaterialParameter> paramete
     : data_(std::move(data)), parameters_(std::move(parameters)), bounds_(bounds) {
   const LoadCase& user = data_.load_case;
   const std::string& file = data_.file;
-  // The forward model steps the data's depths; a force-controlled forward model (the protocol of
-  // a load-controlled instrument) is not built yet (docs/MODEL.md §13).
-  if (user.load.control == LoadControlKind::force)
-    throw InputError(user.source, "load.control",
-                     "the fit runs its forward model under depth control at the data's depths: give the case with "
-                     "load.control = \"depth\" (fitting a force-controlled protocol is not built yet)");
+  refuse_unfittable_load(user);
   prepared_ = user;
   // One kinematics for every forward run: "auto" chosen once on the user's case, so that a step
   // of the parameters or a replanned mesh never switches it (the cost stays smooth).

@@ -477,6 +477,21 @@ const std::vector<KeyDeclaration>& key_declarations() {
       k.push_back(d);
     }
     {
+      KeyDeclaration times = numbers_key(
+          {"load", "times", "array of numbers", "from 0, increasing; one per load.path waypoint", "s",
+           "the time at each waypoint of load.path (docs/MODEL.md §13.2): the path as a protocol in time, a "
+           "repeated waypoint a hold; increments are spread by duration and curve.csv gains a time column"},
+          [](auto& c) -> auto& { return c.load.times; });
+      // Written only when given: a case without time reads and hashes as before the key existed.
+      const auto write = times.write;
+      times.write = [write](const LoadCase& lc) -> std::optional<std::string> {
+        if (lc.load.times.empty()) return std::nullopt;
+        return write(lc);
+      };
+      times.default_words = "none: the path has no time";
+      k.push_back(times);
+    }
+    {
       KeyDeclaration estimate = optional_number_key(
           {"load", "depth_estimate", "number", "> 0", "m",
            "force control: the depth the largest force reaches, which sizes the mesh (written by case.toml from "
@@ -487,7 +502,9 @@ const std::vector<KeyDeclaration>& key_declarations() {
     }
     {
       KeyDeclaration inc{"load", "increments", "integer or array of integers", "[1, 1e7] in all", "",
-                         "increments along the whole path (spread by path length), or one count per segment", true};
+                         "increments along the whole path (spread by path length, or by duration with load.times), or one "
+                         "count per segment",
+                         true};
       inc.read = [](const Reader& r, LoadCase& lc) { r.read_increments(lc.load); };
       inc.write = [](const LoadCase& lc) -> std::optional<std::string> {
         if (lc.load.segment_increments.empty()) return std::to_string(lc.load.increments);

@@ -251,6 +251,17 @@ void validate(const LoadCase& lc) {
     fail("load.path", fmt::format("has {} segments, but load.increments gives {} per-segment counts: set the two "
                                   "together (or load.increments as one total, spread by path length)",
                                   path.size() - 1, lc.load.segment_increments.size()));
+  if (const auto& times = lc.load.times; !times.empty()) {
+    if (times.size() != path.size())
+      fail("load.times", fmt::format("gives {} times for the {} waypoints of load.path: one time per waypoint",
+                                     times.size(), path.size()));
+    if (times.front() != 0.0) fail("load.times", fmt::format("must start at 0 (got {})", times.front()));
+    for (std::size_t i = 1; i < times.size(); ++i)
+      if (!std::isfinite(times[i]) || !(times[i] > times[i - 1]))
+        fail("load.times", fmt::format("time {} ({} s) does not come after time {} ({} s): every segment of the "
+                                       "path needs a positive duration",
+                                       i, times[i], i - 1, times[i - 1]));
+  }
   if (lc.load.increments < 1) fail("load.increments", fmt::format("must be >= 1 (got {})", lc.load.increments));
   if (lc.load.increments > 10'000'000)
     fail("load.increments", fmt::format("{} is more than 1e7 increments", lc.load.increments));

@@ -57,7 +57,8 @@ std::filesystem::path save_checkpoint(const std::filesystem::path& dir, const Ch
 
 bool same_run(const LoadCase& a, const LoadCase& b) {
   return first_physics_difference(a, b).empty() && a.load.control == b.load.control && a.load.path == b.load.path &&
-         a.load.increments == b.load.increments && a.load.segment_increments == b.load.segment_increments;
+         a.load.increments == b.load.increments && a.load.segment_increments == b.load.segment_increments &&
+         a.load.times == b.load.times;
 }
 
 namespace {

@@ -86,35 +86,39 @@ std::string to_string(RunStatus status) {
 }
 
 CurveWriter::CurveWriter(const std::filesystem::path& file, const DiscretizationErrorEstimate* error_estimate,
-                         bool estimate_pending)
-    : file_(file), error_estimate_(error_estimate), estimate_columns_(error_estimate != nullptr || estimate_pending) {
-  file_.append(header(estimate_columns_) + "\n");
+                         bool estimate_pending, std::vector<double> times)
+    : file_(file),
+      error_estimate_(error_estimate),
+      estimate_columns_(error_estimate != nullptr || estimate_pending),
+      times_(std::move(times)) {
+  file_.append(header(estimate_columns_, !times_.empty()) + "\n");
 }
 
 void CurveWriter::set_error_estimate(const DiscretizationErrorEstimate* error_estimate,
                                      const std::vector<IncrementRecord>& rows_written) {
   error_estimate_ = error_estimate;
   if (!error_estimate_ || rows_written.empty()) return;
-  std::string text = header(estimate_columns_) + "\n";
-  for (const IncrementRecord& r : rows_written) text += format(r, error_estimate_, estimate_columns_) + "\n";
+  std::string text = header(estimate_columns_, !times_.empty()) + "\n";
+  for (const IncrementRecord& r : rows_written) text += format(r) + "\n";
   file_.replace(text);
 }
 
-std::string CurveWriter::header(bool with_error_estimate) {
+std::string CurveWriter::header(bool with_error_estimate, bool with_time) {
   // The wall-clock time stays the last column: everything before it is the same in every run.
-  return std::string("step,alpha,P,a,contact_nodes,newton_iters,factorizations,cutbacks,plastic_points,"
-                     "max_strain_intensity") +
+  return std::string(with_time ? "step,time," : "step,") +
+         "alpha,P,a,contact_nodes,newton_iters,factorizations,cutbacks,plastic_points,max_strain_intensity" +
          (with_error_estimate ? ",P_error_estimate,a_error_estimate,P_extrapolated" : "") + ",wall_s";
 }
 
-std::string CurveWriter::format(const IncrementRecord& r, const DiscretizationErrorEstimate* error_estimate,
-                                bool with_estimate_columns) {
+std::string CurveWriter::format(const IncrementRecord& r) const {
   // Full round-trip precision: the curve is data, not a report.
-  std::string line = fmt::format("{},{:.17g},{:.17g},{:.17g},{},{},{},{},{},{:.17g}", r.step, r.alpha, r.force,
-                                 r.half_width, r.contact_nodes, r.newton_iterations, r.factorizations, r.cutbacks,
-                                 r.plastic_points, r.max_strain_intensity);
-  if (error_estimate || with_estimate_columns) {
-    if (const auto e = error_estimate ? error_estimate->at(r) : std::nullopt)
+  std::string line = fmt::format("{},", r.step);
+  if (!times_.empty()) line += fmt::format("{:.17g},", times_.at(static_cast<std::size_t>(r.step)));
+  line += fmt::format("{:.17g},{:.17g},{:.17g},{},{},{},{},{},{:.17g}", r.alpha, r.force, r.half_width,
+                      r.contact_nodes, r.newton_iterations, r.factorizations, r.cutbacks, r.plastic_points,
+                      r.max_strain_intensity);
+  if (estimate_columns_) {
+    if (const auto e = error_estimate_ ? error_estimate_->at(r) : std::nullopt)
       line += fmt::format(",{:.6e},{:.6e},{:.17g}", e->force_error, e->width_error, e->force_extrapolated);
     else
       line += ",,,";  // the companion stopped before this increment (or never ran)
@@ -123,7 +127,7 @@ std::string CurveWriter::format(const IncrementRecord& r, const DiscretizationEr
 }
 
 void CurveWriter::write(const IncrementRecord& record) {
-  file_.append(format(record, error_estimate_, estimate_columns_) + "\n");
+  file_.append(format(record) + "\n");
 }
 
 LoadHistorySummary::LoadHistorySummary(const LoadCase* load_case) {
@@ -261,7 +265,7 @@ RunOutput::RunOutput(const std::filesystem::path& dir, const LoadCase& load_case
       summary_(&load_case),
       fields_every_(load_case.output.fields_every),
       profile_depths_(load_case.output.profile_depths),
-      curve_(dir / "curve.csv", error_estimate, error_estimate_pending),
+      curve_(dir / "curve.csv", error_estimate, error_estimate_pending, plan_times(load_case.load)),
       fields_(dir),
       increments_(load_case.load.total_increments()) {
   // The rows are the planned targets, one each: the deepest state is the first row at the largest

@@ -6,20 +6,22 @@
 
 namespace indentsim {
 
-std::vector<double> plan_increments(const std::vector<double>& path, int increments) {
-  const std::size_t segments = path.size() - 1;
-  std::vector<double> length(segments);
+namespace {
+
+// `increments` spread over segments of the given weights (lengths or durations) in proportion,
+// largest-remainder rounding, at least one per segment of positive weight (none to the others).
+std::vector<int> spread(const std::vector<double>& weight, int increments) {
+  const std::size_t segments = weight.size();
   std::vector<int> count(segments, 0);
-  for (std::size_t s = 0; s < segments; ++s) length[s] = std::abs(path[s + 1] - path[s]);
-  const double total = std::accumulate(length.begin(), length.end(), 0.0);
+  const double total = std::accumulate(weight.begin(), weight.end(), 0.0);
   const std::size_t nonempty =
-      static_cast<std::size_t>(std::count_if(length.begin(), length.end(), [](double l) { return l > 0.0; }));
+      static_cast<std::size_t>(std::count_if(weight.begin(), weight.end(), [](double l) { return l > 0.0; }));
   const int n = std::max(increments, static_cast<int>(nonempty));
   std::vector<double> remainder(segments, -1.0);
   int assigned = 0;
   for (std::size_t s = 0; s < segments; ++s) {
-    if (length[s] <= 0.0) continue;
-    const double share = n * length[s] / total;
+    if (weight[s] <= 0.0) continue;
+    const double share = n * weight[s] / total;
     count[s] = std::max(1, static_cast<int>(std::floor(share)));
     remainder[s] = share - std::floor(share);
     assigned += count[s];
@@ -35,22 +37,42 @@ std::vector<double> plan_increments(const std::vector<double>& path, int increme
     --count[s];
     --assigned;
   }
-  std::vector<double> alphas{path.front()};
-  for (std::size_t s = 0; s < segments; ++s)
-    for (int k = 1; k <= count[s]; ++k)
-      alphas.push_back(k == count[s] ? path[s + 1] : path[s] + (path[s + 1] - path[s]) * k / count[s]);
-  return alphas;
+  return count;
 }
 
-std::vector<double> plan_increments(const LoadInput& load) {
-  if (load.segment_increments.empty()) return plan_increments(load.path, load.increments);
-  std::vector<double> alphas{load.path.front()};
-  for (std::size_t s = 0; s + 1 < load.path.size(); ++s) {
-    const int n = load.segment_increments[s];
-    for (int k = 1; k <= n; ++k)
-      alphas.push_back(k == n ? load.path[s + 1] : load.path[s] + (load.path[s + 1] - load.path[s]) * k / n);
-  }
-  return alphas;
+std::vector<double> segment_lengths(const std::vector<double>& waypoints) {
+  std::vector<double> length(waypoints.size() - 1);
+  for (std::size_t s = 0; s < length.size(); ++s) length[s] = std::abs(waypoints[s + 1] - waypoints[s]);
+  return length;
+}
+
+// The values at the end of each increment along piecewise-linear `waypoints`, `count[s]` uniform
+// increments in segment s, each segment ending exactly on its waypoint.
+std::vector<double> along(const std::vector<double>& waypoints, const std::vector<int>& count) {
+  std::vector<double> values{waypoints.front()};
+  for (std::size_t s = 0; s + 1 < waypoints.size(); ++s)
+    for (int k = 1; k <= count[s]; ++k)
+      values.push_back(k == count[s] ? waypoints[s + 1]
+                                     : waypoints[s] + (waypoints[s + 1] - waypoints[s]) * k / count[s]);
+  return values;
+}
+
+}  // namespace
+
+std::vector<double> plan_increments(const std::vector<double>& path, int increments) {
+  return along(path, spread(segment_lengths(path), increments));
+}
+
+std::vector<int> segment_increments(const LoadInput& load) {
+  if (!load.segment_increments.empty()) return load.segment_increments;
+  return spread(segment_lengths(load.times.empty() ? load.path : load.times), load.increments);
+}
+
+std::vector<double> plan_increments(const LoadInput& load) { return along(load.path, segment_increments(load)); }
+
+std::vector<double> plan_times(const LoadInput& load) {
+  if (load.times.empty()) return {};
+  return along(load.times, segment_increments(load));
 }
 
 std::vector<CurveBranch> unloading_branches(const std::vector<double>& depth) {

@@ -54,6 +54,11 @@ struct CurveReduction {
   std::string note;                  ///< one line: what was done and why ("" when nothing was)
 };
 
+/// Refuses, naming the key, a load case whose load path the fit's forward model cannot follow: it
+/// steps the data's own depths under depth control, so neither force control nor the case's
+/// path in time (load.times) can be honoured.  Throws InputError naming the case's file.
+void refuse_unfittable_load(const LoadCase& load_case);
+
 /// A force-depth curve with many more rows than the model resolves, reduced to what it does.
 /// Every data depth is a waypoint of the fit's forward runs, so a curve of 10^5 rows would cost
 /// 10^5 increments per run where the load case asks for tens.  The curve is split into its

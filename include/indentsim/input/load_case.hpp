@@ -84,6 +84,9 @@ struct LoadInput {
   /// The waypoints of the controlled quantity, from 0: depths alpha [m] under depth control,
   /// forces P [N; N/m in plane strain] under force control.
   std::vector<double> path{0.0, 5e-5};
+  /// The time [s] at each waypoint of `path` (docs/MODEL.md §13.2), from 0 and increasing; empty
+  /// when the path has no time.
+  std::vector<double> times;
   int increments = 10;                  ///< total increments along the path
   /// Optional per-segment counts (`increments = [n1, n2, ...]`, one per segment of the path);
   /// empty when `increments` is a single total spread by segment length.

@@ -29,24 +29,26 @@ namespace indentsim {
 /// set_error_estimate, which rewrites the file with them (atomically) and appends from then on.
 class CurveWriter {
 public:
+  /// `times`: the time of each planned increment (plan_times; empty when the path has no time), a
+  /// `time` column after `step` when given.
   CurveWriter(const std::filesystem::path& file, const DiscretizationErrorEstimate* error_estimate = nullptr,
-              bool estimate_pending = false);
+              bool estimate_pending = false, std::vector<double> times = {});
 
   void write(const IncrementRecord& record);
   /// The estimate has come (null: it will not, its cells stay empty): rewrites the file with
   /// `rows_written`, the rows written so far (RunOutput keeps them), its cells filled in.
   void set_error_estimate(const DiscretizationErrorEstimate* error_estimate,
                           const std::vector<IncrementRecord>& rows_written);
-  static std::string header(bool with_error_estimate = false);
-  /// A row; `with_estimate_columns` (default: when there is an estimate) writes the estimate's
-  /// cells, empty where it has nothing for the row.
-  static std::string format(const IncrementRecord& record, const DiscretizationErrorEstimate* error_estimate = nullptr,
-                            bool with_estimate_columns = false);
+  static std::string header(bool with_error_estimate = false, bool with_time = false);
 
 private:
+  /// A row, with the estimate's cells when the file has them (empty where it has nothing for the row).
+  std::string format(const IncrementRecord& record) const;
+
   AppendedFile file_;
   const DiscretizationErrorEstimate* error_estimate_;
   bool estimate_columns_ = false;
+  std::vector<double> times_;
 };
 
 /// How a run ended, as summary.json says in "status": "running" from its first write until it

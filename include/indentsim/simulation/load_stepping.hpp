@@ -11,8 +11,15 @@ namespace indentsim {
 /// Increments are spread over the segments in proportion to their length |delta alpha|
 /// (largest-remainder rounding, at least one per non-empty segment), uniform within a segment.
 std::vector<double> plan_increments(const std::vector<double>& path, int increments);
-/// The same, honouring per-segment counts when the load case gives them.
+/// The increments of each segment of the load case's path: its per-segment counts, or its total
+/// spread as above -- by the segments' durations when it gives load.times (a hold is a segment
+/// too), else by their lengths.
+std::vector<int> segment_increments(const LoadInput& load);
+/// The targets at the end of each planned increment of the load case (segment_increments).
 std::vector<double> plan_increments(const LoadInput& load);
+/// The time [s] of each planned increment, t_s + (t_{s+1} - t_s) k / n along its segment
+/// (docs/MODEL.md §13.2); empty when the case gives no load.times.
+std::vector<double> plan_times(const LoadInput& load);
 
 /// One unloading branch of a depth sequence (a planned path, a run's curve, a measured
 /// displacement-controlled curve): indices [peak, end], the loading part that led to it starting

@@ -1,0 +1,134 @@
+// The load path in time (docs/MODEL.md §13.2): load.times gives each waypoint its time, a repeated
+// waypoint is a hold, the increments are spread by duration and curve.csv carries each row's time.
+// Every material model is rate-independent so far: a hold must repeat its state exactly, under
+// depth control and under force control alike.
+#include <cmath>
+#include <csignal>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "indentsim/base/error.hpp"
+#include "indentsim/fitting/forward_model.hpp"
+#include "indentsim/input/load_case.hpp"
+#include "indentsim/simulation/load_stepping.hpp"
+#include "indentsim/simulation/simulation.hpp"
+#include "test_support.hpp"
+
+namespace fs = std::filesystem;
+using namespace indentsim;
+using indentsim::testing::shipped_case;
+
+// "Load in 10 s, hold 20 s, unload in 10 s" with 8 increments: by duration 2, 4 and 2, each at
+// its place in time; by the path's length alone the hold would get none.
+TEST(LoadTimes, IncrementsAreSpreadByDurationSoThatAHoldGetsItsShareOfTime) {
+  LoadInput load;
+  load.path = {0.0, 1e-6, 1e-6, 0.0};
+  load.increments = 8;
+  EXPECT_EQ(segment_increments(load), (std::vector<int>{4, 0, 4}));
+  EXPECT_TRUE(plan_times(load).empty());
+
+  load.times = {0.0, 10.0, 30.0, 40.0};
+  EXPECT_EQ(segment_increments(load), (std::vector<int>{2, 4, 2}));
+  const std::vector<double> times = plan_times(load), targets = plan_increments(load);
+  ASSERT_EQ(times.size(), 9u);
+  ASSERT_EQ(targets.size(), 9u);
+  for (std::size_t k = 0; k < times.size(); ++k) EXPECT_DOUBLE_EQ(times[k], 5.0 * static_cast<double>(k)) << k;
+  for (std::size_t k = 2; k <= 6; ++k) EXPECT_EQ(targets[k], 1e-6) << k;  // the hold, at the peak
+  EXPECT_EQ(targets.back(), 0.0);
+
+  // Per-segment counts are the user's, with or without times.
+  load.segment_increments = {1, 2, 3};
+  EXPECT_EQ(segment_increments(load), (std::vector<int>{1, 2, 3}));
+  EXPECT_DOUBLE_EQ(plan_times(load)[2], 20.0);
+}
+
+// J2 plasticity has no rate: through a hold at the peak depth (depth control) or the peak force
+// (force control) the force and the depth stay those of the peak, and Newton starts converged.
+TEST(LoadTimes, ARateIndependentSpecimenRepeatsItsStateThroughAHold) {
+  const std::vector<std::string> common{"mesh.contact_nodes=8", "mesh.contact_half_width=3.2e-6",
+                                        "mesh.error_estimate=off", "load.times=[0, 10, 20, 25]",
+                                        "load.increments=[5, 3, 2]"};
+  for (const bool force_control : {false, true}) {
+    SCOPED_TRACE(force_control ? "force control" : "depth control");
+    std::vector<std::string> overrides = common;
+    if (force_control) {
+      overrides.insert(overrides.end(), {"load.control=force", "load.path=[0, 0.02, 0.02, 0.01]",
+                                         "load.depth_estimate=1e-6"});
+    } else {
+      overrides.push_back("load.path=[0, 1e-6, 1e-6, 0.8e-6]");
+    }
+    const LoadCase lc = shipped_case("axisymmetric/berkovich_cone.toml", overrides);
+    Simulation sim(lc);
+    std::vector<IncrementRecord> rows;
+    sim.run([&](const IncrementRecord& r) { rows.push_back(r); });
+    ASSERT_EQ(rows.size(), 11u);  // step 0 and 10 increments
+    const IncrementRecord& peak = rows[5];
+    EXPECT_GT(peak.plastic_points, 0);
+    for (std::size_t k = 6; k <= 8; ++k) {
+      SCOPED_TRACE(k);
+      EXPECT_NEAR(rows[k].force, peak.force, 1e-10 * peak.force);
+      EXPECT_NEAR(rows[k].alpha, peak.alpha, 1e-10 * peak.alpha);
+      EXPECT_EQ(rows[k].plastic_points, peak.plastic_points);
+      EXPECT_LE(rows[k].newton_iterations, 1);
+    }
+    EXPECT_LT(rows.back().force, peak.force);  // and the unloading after it unloads
+  }
+}
+
+TEST(LoadTimes, TimesThatDoNotFitThePathAreRefusedByName) {
+  const auto refused = [](const std::vector<std::string>& overrides) -> std::string {
+    std::vector<std::string> all{"load.path=[0, 1e-6, 1e-6, 0]"};
+    all.insert(all.end(), overrides.begin(), overrides.end());
+    try {
+      shipped_case("axisymmetric/elastic_sphere.toml", all);
+    } catch (const InputError& e) {
+      return e.key();
+    }
+    return "";
+  };
+  EXPECT_EQ(refused({"load.times=[0, 10, 20]"}), "load.times");         // one time short
+  EXPECT_EQ(refused({"load.times=[1, 10, 20, 30]"}), "load.times");     // not from 0
+  EXPECT_EQ(refused({"load.times=[0, 10, 10, 30]"}), "load.times");     // a segment of no duration
+  EXPECT_EQ(refused({"load.times=[0, 10, 5, 30]"}), "load.times");      // time running back
+  EXPECT_EQ(refused({"load.times=[0, 10, 20, 30]"}), "");
+  // The fit steps the data's depths, not the case's protocol in time.
+  const LoadCase timed = shipped_case("axisymmetric/elastic_sphere.toml",
+                                      {"load.path=[0, 1e-6, 1e-6, 0]", "load.times=[0, 10, 20, 30]"});
+  try {
+    refuse_unfittable_load(timed);
+    FAIL() << "the fit took a case with load.times";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.key(), "load.times");
+  }
+}
+
+class LoadTimesCli : public indentsim::testing::CliTest {};
+
+// curve.csv gains each row's time after its step, the run warns that time reaches no law, and a
+// run killed in its hold resumes to the same curve, times included; a resume that moves the
+// times of rows already written is refused by name.
+TEST_F(LoadTimesCli, CurveRowsCarryTheirTimeThroughAKillAndAResume) {
+  const std::string source = indentsim::testing::source_path("loadcases/axisymmetric/berkovich_cone.toml");
+  const std::string args = " --set mesh.contact_nodes=8 --set load.path=[0,1e-6,1e-6,0.8e-6] "
+                           "--set load.times=[0,10,20,25] --set load.increments=8 "
+                           "--set output.checkpoint_every=2";
+  ASSERT_EQ(cli("run " + source + args + " --out " + (dir_ / "full").string()), 0) << err();
+  EXPECT_NE(err().find("load.times only labels the increments"), std::string::npos) << err();
+  const std::string expected = indentsim::testing::curve_without_timing(dir_ / "full" / "curve.csv");
+  EXPECT_EQ(expected.substr(0, expected.find('\n')).rfind("step,time,alpha,P,", 0), 0u) << expected;
+  // 8 increments by duration: 3 loading, 3 holding, 2 unloading; every row at its planned time.
+  const std::vector<std::vector<double>> rows = indentsim::testing::read_curve(dir_ / "full" / "curve.csv");
+  ASSERT_EQ(rows.size(), 9u);
+  const std::vector<double> planned{0.0, 10.0 / 3, 20.0 / 3, 10.0, 40.0 / 3, 50.0 / 3, 20.0, 22.5, 25.0};
+  for (std::size_t k = 0; k < rows.size(); ++k) EXPECT_NEAR(rows[k][1], planned[k], 1e-12 * 25.0) << k;
+
+  const fs::path out = dir_ / "killed";
+  EXPECT_EQ(cli("run " + source + args + " --quiet --out " + out.string(), "INDENTSIM_FAULT=increment:5"),
+            128 + SIGKILL);
+  EXPECT_EQ(cli("resume " + (out / "checkpoints").string() + " --quiet --set load.times=[0,10,30,35]"), 2);
+  EXPECT_NE(err().find("load.times"), std::string::npos) << err();
+  ASSERT_EQ(cli("resume " + (out / "checkpoints").string() + " --quiet"), 0) << err();
+  EXPECT_EQ(indentsim::testing::curve_without_timing(out / "curve.csv"), expected);
+}
