@@ -326,6 +326,11 @@ def indenter_words(case, omit=()):
         points = punch.get("profile_points") or []
         name = pathlib.Path(str(punch["profile"])).name if punch.get("profile") else None
         return "measured tip profile" + (f" ({name})" if name else f" ({len(points)} points)" if points else "")
+    if shape == "area_function":
+        c = punch.get("area_coefficients") or []
+        if "punch.area_coefficients" in omit or not c:
+            return "calibrated tip (area function)"
+        return f"calibrated tip, A = {number(c[0], 3)} h²" + (" + …" if any(c[1:]) else "")
     return shape
 
 

@@ -113,11 +113,35 @@ class Scene:
             if x < cap:
                 return tip - math.sqrt(tip * tip - x * x)
             return tip - math.sqrt(tip * tip - cap * cap) + (x - cap) / math.tan(theta)
+        if self.shape == "area_function":
+            return area_function_height(self.punch["area_coefficients"], x)
         points = self.punch["profile_points"]
         for (r0, g0), (r1, g1) in zip(points, points[1:]):
             if r0 <= x <= r1:
                 return g0 + (g1 - g0) * (x - r0) / (r1 - r0)
         return None
+
+
+def area_function_height(coefficients, x):
+    """The depth h of the equal-area profile at radius x: A(h) = pi x^2 (docs/MODEL.md §13.5),
+    with A(h) = C0 h^2 + C1 h + C2 h^(1/2) + ... + C8 h^(1/128); None where A stops growing."""
+    def area(h):
+        return sum(c * h ** (2.0 if k == 0 else 2.0 ** (1 - k)) for k, c in enumerate(coefficients))
+    target = math.pi * x * x
+    if target == 0.0:
+        return 0.0
+    lo, hi = 0.0, 1e-15
+    while area(hi) < target:
+        lo, hi = hi, 2 * hi
+        if hi > 1.0:
+            return None
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        if area(mid) >= target:
+            hi = mid
+        else:
+            lo = mid
+    return hi
 
 
 def column_of(rows, name, default=0.0):

@@ -68,6 +68,7 @@ nlohmann::ordered_json indenter_json(const PunchInput& p, const AnalysisInput& s
       if (!p.profile_file.empty()) j["profile_file"] = p.profile_file;
       j["profile_points"] = p.profile.size();
       break;
+    case PunchShapeKind::area_function: j["area_coefficients"] = p.area_coefficients; break;
   }
   j["E"] = settings.indenter_E ? nlohmann::ordered_json(*settings.indenter_E) : nlohmann::ordered_json("rigid");
   j["nu"] = settings.indenter_nu;

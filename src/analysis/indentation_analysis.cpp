@@ -174,7 +174,8 @@ double contact_depth_factor(const AnalysisContext& context) {
     case PunchShapeKind::cone: return 0.72;
     case PunchShapeKind::flat: return 1.0;
     case PunchShapeKind::sphere:
-    case PunchShapeKind::profile: return 0.75;
+    case PunchShapeKind::profile:
+    case PunchShapeKind::area_function: return 0.75;  // Oliver and Pharr's own choice for a calibrated Berkovich
   }
   return 0.75;
 }

@@ -211,12 +211,69 @@ std::optional<std::string> ProfilePunch::slope_warning(double alpha) const {
                      steepest, max_slope);
 }
 
+AreaFunctionPunch::AreaFunctionPunch(std::vector<double> coefficients) : c_(std::move(coefficients)) {}
+
+double AreaFunctionPunch::surface_height(double r) const {
+  const double ar = std::abs(r);
+  if (ar == 0.0) return 0.0;
+  const double target = std::numbers::pi * ar * ar;
+  // A bracket [lo, hi] of the depth whose area is the target, by doubling from below any tip's
+  // scale; where the area stops growing before it reaches the target, the tip has no surface
+  // there (validation refuses that within the depths a run reaches).
+  double lo = 0.0, hi = 1e-15;
+  for (int it = 0; area_function_area(c_, hi) < target; ++it) {
+    if (it >= 400 || !(area_function_slope(c_, hi) > 0.0)) return infinity;
+    lo = hi;
+    hi *= 2.0;
+  }
+  // Newton's steps on A(h) = target, kept inside the bracket (bisection when a step leaves it).
+  double h = hi;
+  for (int it = 0; it < 200; ++it) {
+    const double f = area_function_area(c_, h) - target;
+    if (f == 0.0) return h;
+    (f > 0.0 ? hi : lo) = h;
+    double next = h - f / area_function_slope(c_, h);
+    if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+    if (std::abs(next - h) <= 1e-16 * h || hi - lo <= 1e-16 * hi) return next;
+    h = next;
+  }
+  return h;
+}
+
+double AreaFunctionPunch::slope(double r) const {
+  const double ar = std::abs(r);
+  if (ar == 0.0) {
+    // At the tip: a pure C0 h^2 is a cone of slope sqrt(pi / C0); any lower power of h makes A grow
+    // faster than r^2 near h = 0, and the tip is flat there.
+    const bool cone = std::all_of(c_.begin() + 1, c_.end(), [](double c) { return c == 0.0; });
+    return cone ? std::sqrt(std::numbers::pi / c_[0]) : 0.0;
+  }
+  const double h = surface_height(ar);
+  if (!std::isfinite(h)) return infinity;
+  return 2.0 * std::numbers::pi * ar / area_function_slope(c_, h);
+}
+
+double AreaFunctionPunch::geometric_contact_radius(double alpha) const {
+  return std::sqrt(std::max(0.0, area_function_area(c_, alpha)) / std::numbers::pi);
+}
+
+std::optional<std::string> AreaFunctionPunch::slope_warning(double alpha) const {
+  const double edge = geometric_contact_radius(alpha);
+  double steepest = 0.0;
+  for (int k = 1; k <= 32; ++k) steepest = std::max(steepest, slope(edge * k / 32.0));
+  if (steepest <= max_slope) return std::nullopt;
+  return fmt::format("the area function's profile of equal area rises at slopes up to {:.3g} within the contact: the "
+                     "small-slope contact model (vertical gap) is pushed beyond its range (slopes up to {:g})",
+                     steepest, max_slope);
+}
+
 std::shared_ptr<const PunchShape> make_punch(const PunchInput& p) {
   switch (p.shape) {
     case PunchShapeKind::cone:
       return std::make_shared<ConicalPunch>(p.half_angle * std::numbers::pi / 180.0, p.tip_radius);
     case PunchShapeKind::flat: return std::make_shared<FlatPunch>(p.radius);
     case PunchShapeKind::profile: return std::make_shared<ProfilePunch>(p.profile);
+    case PunchShapeKind::area_function: return std::make_shared<AreaFunctionPunch>(p.area_coefficients);
     case PunchShapeKind::sphere: break;
   }
   return std::make_shared<SphericalPunch>(p.radius);

@@ -186,7 +186,8 @@ const std::vector<KeyDeclaration>& key_declarations() {
     k.push_back(choice_key({"punch", "shape", "choice", "", "",
                             "sphere (circular profile of radius R: a sphere in axisymmetry, a cylinder in plane "
                             "strain; \"cylinder\" is a synonym), cone (a wedge in plane strain), flat (flat-ended), "
-                            "profile (a measured tip)"},
+                            "profile (a measured tip), area_function (a calibrated tip's A(h_c), as the axisymmetric profile of "
+                            "equal area)"},
                            shape_names, [](auto& c) -> auto& { return c.punch.shape; }));
     {
       KeyDeclaration radius{"punch", "radius", "number", "> 0, > the deepest depth (sphere)", "m",
@@ -271,6 +272,20 @@ const std::vector<KeyDeclaration>& key_declarations() {
         return text + "]";
       };
       k.push_back(points);
+    }
+    {
+      KeyDeclaration area{"punch", "area_coefficients", "array of numbers", "1 to 9; A(h_c) increasing", "SI",
+                          "area_function: C0, C1, ..., C8 of A(h_c) = C0 h_c^2 + C1 h_c + C2 h_c^(1/2) + ... + "
+                          "C8 h_c^(1/128), C_k in m^(2 - e_k) for h_c in m (C0 = 24.5 for the ideal Berkovich)"};
+      area.default_words = "none: area_function needs it";
+      area.read = [](const Reader& r, LoadCase& lc) {
+        r.read_number_array("punch", "area_coefficients", lc.punch.area_coefficients);
+      };
+      area.write = [](const LoadCase& lc) -> std::optional<std::string> {
+        if (lc.punch.shape != PunchShapeKind::area_function) return std::nullopt;
+        return toml_numbers(lc.punch.area_coefficients);
+      };
+      k.push_back(area);
     }
     k.push_back(choice_key({"material", "model", "choice", "", "",
                             "elastic; ilyushin (deformation theory, the paper's); j2 (flow theory)", true},
@@ -518,11 +533,11 @@ const std::vector<KeyDeclaration>& key_declarations() {
     k.push_back(choice_key({"mesh", "element", "choice", "", "",
                             "q1 (the paper's exact element), bbar (mean dilatation, locking-free), auto (B-bar when "
                             "nu >= 0.45 or kappa > 0.95 or n < 0.1 or a j2 flow curve (power_law ... table), or a plastic material "
-                            "under a cone)"},
+                            "under a cone or an area function)"},
                            element_names, [](auto& c) -> auto& { return c.mesh.element; }));
     k.push_back(integer_key({"mesh", "contact_nodes", "integer", ">= 2", "",
                              "fine-zone elements across the estimated final contact half-width (raise it to buy "
-                             "accuracy); 30 under a cone"},
+                             "accuracy); 30 under a cone or an area function"},
                             [](auto& c) -> auto& { return c.mesh.contact_nodes; }));
     k.push_back(plausible(optional_number_key({"mesh", "contact_half_width", "number", "> 0", "m",
                                      "override of the estimate a* that sizes the mesh (default: Hertz, or a pilot run)"},

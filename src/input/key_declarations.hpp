@@ -56,6 +56,7 @@ inline constexpr Choice<PunchShapeKind> shape_names[] = {{"sphere", PunchShapeKi
                                                   {"cone", PunchShapeKind::cone},
                                                   {"flat", PunchShapeKind::flat},
                                                   {"profile", PunchShapeKind::profile},
+                                                  {"area_function", PunchShapeKind::area_function},
                                                   {"cylinder", PunchShapeKind::sphere}};
 inline constexpr Choice<ErrorEstimateChoice> error_estimate_names[] = {{"richardson", ErrorEstimateChoice::richardson},
                                                                 {"observed", ErrorEstimateChoice::observed},

@@ -26,6 +26,24 @@ double LoadInput::largest_target() const {
   return largest;
 }
 
+double area_function_exponent(std::size_t k) { return k == 0 ? 2.0 : std::ldexp(1.0, 1 - static_cast<int>(k)); }
+
+double area_function_area(const std::vector<double>& c, double h) {
+  double area = 0.0;
+  for (std::size_t k = 0; k < c.size(); ++k)
+    if (c[k] != 0.0) area += c[k] * std::pow(h, area_function_exponent(k));
+  return area;
+}
+
+double area_function_slope(const std::vector<double>& c, double h) {
+  double slope = 0.0;
+  for (std::size_t k = 0; k < c.size(); ++k) {
+    const double e = area_function_exponent(k);
+    if (c[k] != 0.0) slope += c[k] * e * std::pow(h, e - 1.0);
+  }
+  return slope;
+}
+
 double LoadCase::max_depth() const {
   if (load.control == LoadControlKind::force) return load.depth_estimate.value_or(0.0);
   return load.largest_target();
@@ -123,7 +141,8 @@ void check_punch_keys(const Reader& r, LoadCase& lc) {
   const std::vector<ShapeKeys> table = {{PunchShapeKind::sphere, {"radius"}},
                                         {PunchShapeKind::cone, {"half_angle", "tip_radius"}},
                                         {PunchShapeKind::flat, {"radius"}},
-                                        {PunchShapeKind::profile, {"profile", "profile_points"}}};
+                                        {PunchShapeKind::profile, {"profile", "profile_points"}},
+                                        {PunchShapeKind::area_function, {"area_coefficients"}}};
   const std::string shape = to_string(lc.punch.shape);
   for (const auto& entry : table) {
     if (entry.shape == lc.punch.shape) continue;
@@ -158,6 +177,11 @@ void check_punch_keys(const Reader& r, LoadCase& lc) {
       }
       break;
     }
+    case PunchShapeKind::area_function:
+      if (!r.find("punch", "area_coefficients"))
+        r.fail("punch.area_coefficients", "missing key (punch.shape = \"area_function\" needs the coefficients C0, "
+                                          "C1, ... of its area function, e.g. [24.5] for the ideal Berkovich)");
+      break;
   }
 }
 
@@ -244,7 +268,8 @@ LoadCase from_table(const toml::table& root, const std::string& source, const st
   // A cone has no length scale: its contact edge sweeps the whole contact zone node by node, and
   // under a plastic material the edge carries the full hardness, so the node-by-node engagement is
   // a first-order error.  30 elements hold Kick's law P/h^2 = const to 0.34% (docs/verification.md, "Kick's law on a cone").
-  if (lc.punch.shape == PunchShapeKind::cone && !r.find("mesh", "contact_nodes"))
+  // A calibrated tip's area function is a cone beyond its rounding.
+  if (sharp_tip(lc.punch.shape) && !r.find("mesh", "contact_nodes"))
     lc.mesh.contact_nodes = cone_contact_nodes;
   validate(lc);
   return lc;

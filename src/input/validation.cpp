@@ -58,6 +58,40 @@ void validate_profile(const LoadCase& lc, bool within_run) {
                                                  points.back().first, lc.geometry.lx));
 }
 
+/// A calibrated tip's area function (docs/MODEL.md §13.5): one to nine finite coefficients; within
+/// a run, A(h_c) positive and increasing over the depths the contact can reach (to twice the deepest
+/// depth, where pile-up takes it), sampled at 400 depths log-spaced over six decades below that --
+/// else its profile of equal area, g = A^-1(pi r^2), does not exist, and the coefficient whose term
+/// pulls the area down most there is named.
+void validate_area_function(const LoadCase& lc, bool within_run) {
+  const auto& c = lc.punch.area_coefficients;
+  const auto fail = [&](const std::string& problem) { throw InputError(lc.source, "punch.area_coefficients", problem); };
+  if (c.empty() || c.size() > max_area_coefficients)
+    fail(fmt::format("gives {} coefficients: an area function takes C0 to C8 (1 to {})", c.size(),
+                     max_area_coefficients));
+  for (std::size_t k = 0; k < c.size(); ++k)
+    if (!std::isfinite(c[k])) fail(fmt::format("C{} = {} is not a finite number", k, c[k]));
+  if (!within_run || !(lc.max_depth() > 0.0)) return;
+  const double reach = 2.0 * lc.max_depth();
+  for (int i = 0; i <= 400; ++i) {
+    const double h = reach * std::pow(10.0, -6.0 + 6.0 * i / 400.0);
+    const double area = area_function_area(c, h), slope = area_function_slope(c, h);
+    if (area > 0.0 && slope > 0.0) continue;
+    // The term that pulls A (or dA/dh) down most at h.
+    std::size_t worst = 0;
+    double most = 0.0;
+    for (std::size_t k = 0; k < c.size(); ++k) {
+      const double e = area_function_exponent(k);
+      const double term = area > 0.0 ? c[k] * e * std::pow(h, e - 1.0) : c[k] * std::pow(h, e);
+      if (term < most) most = term, worst = k;
+    }
+    fail(fmt::format("the area function {} at h_c = {:.4g} m (A = {:.4g} m^2, dA/dh_c = {:.4g} m): C{} = {:g} "
+                     "pulls it down there; the area must be positive and grow with the depth over the depths the "
+                     "contact reaches (to {:.4g} m, twice the deepest depth)",
+                     area > 0.0 ? "does not increase" : "is not positive", h, area, slope, worst, c[worst], reach));
+  }
+}
+
 /// A hardening law's parameters (docs/MODEL.md §12.1): each law's own keys given, what the law
 /// cannot take refused, a table's flow curve from eps_p = 0, increasing, sigma not falling.
 static void validate_hardening(const LoadCase& lc) {
@@ -136,6 +170,7 @@ void validate_punch_shape(const LoadCase& lc) {
       throw InputError(lc.source, "punch.tip_radius", fmt::format("must be >= 0 (got {})", punch.tip_radius));
   }
   if (punch.shape == PunchShapeKind::profile) validate_profile(lc, false);
+  if (punch.shape == PunchShapeKind::area_function) validate_area_function(lc, false);
 }
 
 void validate_analysis(const LoadCase& lc) {
@@ -174,6 +209,12 @@ void validate(const LoadCase& lc) {
                                            punch.tip_radius, cap, lc.geometry.lx));
   }
   if (punch.shape == PunchShapeKind::profile && !lc.load.path.empty()) validate_profile(lc, true);
+  if (punch.shape == PunchShapeKind::area_function) {
+    if (lc.geometry.kind != SceneKind::axisymmetric)
+      fail("punch.shape", "\"area_function\" is the projected area of a tip of revolution (or a pyramid's equal-area "
+                          "cone): plane strain has no such profile; use geometry.kind = \"axisymmetric\", or a profile");
+    validate_area_function(lc, true);
+  }
   // Friction's rows are written beside node-to-rigid's normal rows (docs/MODEL.md §3.3); a finite
   // coefficient's slip rows are unsymmetric, which CHOLMOD's Cholesky cannot factor.
   if (lc.contact.friction > 0.0 && lc.contact.discretization != ContactDiscretizationChoice::node_to_rigid)

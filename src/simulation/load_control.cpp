@@ -67,7 +67,8 @@ private:
 double force_exponent(PunchShapeKind shape) {
   switch (shape) {
     case PunchShapeKind::flat: return 1.0;
-    case PunchShapeKind::cone: return 2.0;
+    case PunchShapeKind::cone:
+    case PunchShapeKind::area_function: return 2.0;  // a calibrated sharp tip: A ~ h^2 beyond its rounding
     case PunchShapeKind::sphere:
     case PunchShapeKind::profile: break;
   }

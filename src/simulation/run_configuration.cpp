@@ -153,6 +153,7 @@ LoadCase with_depth_estimate(LoadCase lc) {
     if (settled) break;
   }
   lc.load.depth_estimate = depth;
+  validate(lc);  // what depends on the deepest depth (a tip's area function over it) is checked now
   return lc;
 }
 
@@ -216,7 +217,7 @@ ElementKind choose_element(const LoadCase& lc) {
   // (saturates, or is flat beyond a table): the flow under an indenter is nearly perfectly plastic.
   const bool near_perfect_plasticity =
       plastic && (m.flow_stress_law() || (m.hardening == HardeningLaw::linear ? m.kappa > 0.95 : m.n < 0.1));
-  const bool sharp_plastic_indentation = plastic && lc.punch.shape == PunchShapeKind::cone;
+  const bool sharp_plastic_indentation = plastic && sharp_tip(lc.punch.shape);
   return near_incompressible || near_perfect_plasticity || sharp_plastic_indentation ? ElementKind::bbar
                                                                                        : ElementKind::q1;
 }
@@ -229,6 +230,8 @@ static std::string contact_size_question(const LoadCase& lc) {
     case PunchShapeKind::flat: return "is punch.radius in metres?";
     case PunchShapeKind::cone: return "is load.path in metres?";
     case PunchShapeKind::profile: return "are the profile's points and load.path in metres?";
+    case PunchShapeKind::area_function:
+      return "are punch.area_coefficients in SI (A in m^2 for h_c in m) and load.path in metres?";
   }
   return "";
 }

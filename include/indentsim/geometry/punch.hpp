@@ -12,6 +12,8 @@
 //   ProfilePunch    a measured tip: g at points r_0 = 0 < r_1 < ... , interpolated by the monotone
 //                   cubic of Fritsch and Carlson (SIAM J. Numer. Anal. 17, 1980), so that a
 //                   rising profile never dips between its points.
+//   AreaFunctionPunch  a calibrated tip's area function A(h_c) (Oliver and Pharr 1992) as the
+//                   axisymmetric profile of equal area: pi r^2 = A(g(r)), so g = A^-1(pi r^2).
 #include <memory>
 #include <optional>
 #include <string>
@@ -114,6 +116,24 @@ public:
 private:
   std::size_t interval(double r) const;
   std::vector<double> r_, g_, d_;  ///< points and the Fritsch-Carlson slopes at them
+};
+
+class AreaFunctionPunch final : public PunchShape {
+public:
+  /// The coefficients C0 ... C8 of area_function_area (load_case.hpp), SI.
+  explicit AreaFunctionPunch(std::vector<double> coefficients);
+  std::string name() const override { return "area_function"; }
+  /// The depth h whose area is pi r^2: the smallest h with A(h) >= pi r^2 (found by doubling a
+  /// bracket, then Newton's steps kept inside it); +inf where A no longer grows before reaching it.
+  double surface_height(double r) const override;
+  /// dg/dr = 2 pi r / A'(g(r)).
+  double slope(double r) const override;
+  /// sqrt(A(alpha) / pi): the area the analysis takes is A(h_c) itself.
+  double geometric_contact_radius(double alpha) const override;
+  std::optional<std::string> slope_warning(double alpha) const override;
+
+private:
+  std::vector<double> c_;
 };
 
 /// The punch a load case describes.

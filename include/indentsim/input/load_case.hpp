@@ -30,7 +30,7 @@ struct GeometryInput {
   double ly = 10e-3;  ///< block depth, or the specimen's height [m]
 };
 
-enum class PunchShapeKind { sphere, cone, flat, profile };
+enum class PunchShapeKind { sphere, cone, flat, profile, area_function };
 
 struct PunchInput {
   PunchShapeKind shape = PunchShapeKind::sphere;
@@ -39,7 +39,19 @@ struct PunchInput {
   double tip_radius = 0.0;   ///< cone: radius of the spherical cap blunting the tip (0: sharp) [m]
   std::string profile_file;  ///< profile: the CSV file it was read from, as given ("" when inline)
   std::vector<std::pair<double, double>> profile;  ///< profile: points (r, g(r)) [m]
+  /// area_function: C0, C1, ... (up to C8) of Oliver and Pharr's A(h_c), SI (area_function_area).
+  std::vector<double> area_coefficients;
 };
+
+/// The most coefficients Oliver and Pharr's area function takes (C0 ... C8).
+inline constexpr std::size_t max_area_coefficients = 9;
+/// The exponent of h_c that coefficient k multiplies: 2, 1, 1/2, 1/4, ..., 1/128.
+double area_function_exponent(std::size_t k);
+/// The projected contact area of a tip's area function at contact depth h >= 0 (Oliver and Pharr,
+/// J. Mater. Res. 7, 1992, eq. 25): A(h) = C0 h^2 + C1 h + C2 h^(1/2) + ... + C8 h^(1/128), with
+/// C_k in m^(2 - e_k) so that A is in m^2 for h in m; and its derivative dA/dh.
+double area_function_area(const std::vector<double>& coefficients, double h);
+double area_function_slope(const std::vector<double>& coefficients, double h);
 
 enum class MaterialModel { elastic, ilyushin, j2 };
 /// linear and power: Ilyushin's omega(e_u) (both models); power_law, ludwik, swift, voce and table:
@@ -107,7 +119,14 @@ struct LoadInput {
 
 enum class ElementChoice { automatic, q1, bbar };
 
-/// The default mesh.contact_nodes under a cone (load_case.cpp says why).
+/// A tip whose contact has no length scale, or only one far below its contact (a rounding): a cone,
+/// or a calibrated tip's area function (A ~ C0 h^2 beyond its rounding).  Its contact edge sweeps
+/// the contact zone node by node, and under plastic flow the whole contact is near-incompressible.
+inline bool sharp_tip(PunchShapeKind shape) {
+  return shape == PunchShapeKind::cone || shape == PunchShapeKind::area_function;
+}
+
+/// The default mesh.contact_nodes under a sharp tip (load_case.cpp says why).
 inline constexpr int cone_contact_nodes = 30;
 
 /// How a run estimates its own discretization error (error_estimate.hpp): a companion run on a
