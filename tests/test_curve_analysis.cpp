@@ -2,6 +2,7 @@
 // run's own folder.  The synthetic measured test is built from the power law itself, so Oliver
 // and Pharr's numbers are known in closed form; the bad files must be refused, naming the file
 // and the problem, with nothing written.
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <numbers>
@@ -105,6 +106,22 @@ TEST_F(MeasuredCurve, UnitsGivenOrReadFromTheHeaderGiveTheSameNumbers) {
   const CurveAnalysis d = analyze_measured_curve(in_nm, cone_setup({"material.nu=0.3", "analysis.indenter_E=1141e9"}));
   const double E_r = *d.branches[0].result.reduced_modulus, E = *d.branches[0].result.specimen_modulus;
   EXPECT_NEAR((1 - 0.09) / E + (1 - 0.07 * 0.07) / 1141e9, 1.0 / E_r, 1e-9 / E_r);
+}
+
+// A spreadsheet's export of the same test: a UTF-8 byte-order mark before the header (no metadata
+// line), semicolons and Windows line ends.  The header's first field must still be "Depth".
+TEST_F(MeasuredCurve, AByteOrderMarkSemicolonsAndWindowsLineEndsReadAsThePlainFile) {
+  const std::string plain = test.csv(1e-9, 1e-3, "Depth (nm)\tLoad (mN)\tTime (s)");
+  std::string exported = "\xEF\xBB\xBF" + plain.substr(plain.find('\n') + 1);
+  std::replace(exported.begin(), exported.end(), '\t', ';');
+  std::string windows;
+  for (char c : exported) windows += c == '\n' ? std::string("\r\n") : std::string(1, c);
+  const CurveAnalysis a = analyze_measured_curve(write("plain.txt", plain), cone_setup());
+  const CurveAnalysis b = analyze_measured_curve(write("export.csv", windows), cone_setup());
+  ASSERT_EQ(b.branches.size(), 1u);
+  EXPECT_EQ(b.branches[0].result.hardness, a.branches[0].result.hardness);
+  EXPECT_EQ(*b.branches[0].result.reduced_modulus, *a.branches[0].result.reduced_modulus);
+  EXPECT_EQ(b.depth_unit, "nm");
 }
 
 TEST_F(MeasuredCurve, TheCliWritesAnalysisJsonWithUnits) {

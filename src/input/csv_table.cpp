@@ -101,8 +101,11 @@ CsvTable read_csv_table(const std::filesystem::path& file, std::size_t max_bytes
   if (!in) fail("cannot open for reading");
   std::ostringstream text;
   text << in.rdbuf();
-  const std::string bytes = text.str();
+  std::string bytes = text.str();
   if (bytes.size() > max_bytes) fail(fmt::format("is larger than {} MiB", max_bytes >> 20));
+  // A UTF-8 byte-order mark, which spreadsheet programs and some instruments' software write first:
+  // not part of the first header field.
+  if (bytes.compare(0, 3, "\xEF\xBB\xBF") == 0) bytes.erase(0, 3);
 
   CsvTable table;
   table.delimiter = detect_delimiter(bytes);
