@@ -124,6 +124,44 @@ TEST_F(MeasuredCurve, AByteOrderMarkSemicolonsAndWindowsLineEndsReadAsThePlainFi
   EXPECT_EQ(b.depth_unit, "nm");
 }
 
+// A load-controlled test with a hold: the depth creeps at a constant rate c through the hold and
+// on through an unloading at a constant rate r, whose elastic stiffness is S_e.  The unloading
+// curve is then the straight line of slope S_u = 1 / (1/S_e - c/r), too stiff by 11% here (the
+// "nose" of an unloading begun too soon), and Feng and Ngan's correction 1/S_e = 1/S_u + c/r
+// gives S_e back: exactly, but for the 9 digits the file is written with.
+TEST_F(MeasuredCurve, AHoldsCreepIsMeasuredAndFengNgansCorrectionGivesTheElasticStiffnessBack) {
+  const double P_max = 20e-3, h_load = 1000e-9, creep_rate = 1e-9, unloading_rate = 1e-3, S_e = 1e5;
+  std::string text = "Time (s);Depth (nm);Load (mN)\n";
+  const auto row = [&](double t, double h, double P) { text += fmt::format("{:.9g};{:.9g};{:.9g}\n", t, h / 1e-9, P / 1e-3); };
+  for (int k = 0; k <= 60; ++k) row(0.1 * k, h_load * k / 60.0, P_max * (k / 60.0) * (k / 60.0));
+  const double t_hold = 6.0, hold = 20.0;
+  for (int k = 1; k <= 40; ++k) row(t_hold + hold * k / 40.0, h_load + creep_rate * hold * k / 40.0, P_max);
+  const double t_unload = t_hold + hold, h_peak = h_load + creep_rate * hold;
+  for (int k = 1; k <= 80; ++k) {
+    const double t = t_unload + 20.0 * k / 80.0, P = P_max - unloading_rate * (t - t_unload);
+    row(t, h_peak + (P - P_max) / S_e + creep_rate * (t - t_unload), std::max(P, 0.0));
+  }
+  const auto file = write("hold.csv", text);
+  const CurveAnalysis c = analyze_measured_curve(file, cone_setup({"curve.time_column=\"time\""}));
+  ASSERT_EQ(c.branches.size(), 1u);
+  const BranchAnalysis& a = c.branches[0].result;
+  ASSERT_TRUE(a.hold);
+  EXPECT_NEAR(a.hold->duration, hold, 1e-9);
+  EXPECT_NEAR(a.hold->creep_depth / (creep_rate * hold), 1.0, 1e-6);
+  EXPECT_NEAR(a.hold->depth_rate / creep_rate, 1.0, 1e-6);
+  ASSERT_TRUE(a.hold->unloading_rate);
+  EXPECT_NEAR(*a.hold->unloading_rate / unloading_rate, 1.0, 1e-6);
+  EXPECT_NEAR(a.fit.stiffness / (1.0 / (1.0 / S_e - creep_rate / unloading_rate)), 1.0, 1e-4);
+  ASSERT_TRUE(a.hold->stiffness);
+  EXPECT_NEAR(*a.hold->stiffness / S_e, 1.0, 1e-4);
+  ASSERT_TRUE(a.hold->corrected && a.hold->corrected->reduced_modulus && a.reduced_modulus);
+  EXPECT_LT(*a.hold->corrected->reduced_modulus, *a.reduced_modulus);  // creep made E_r look higher
+  // Without the time column the curve is analysed as before, and has no hold.
+  const CurveAnalysis untimed = analyze_measured_curve(file, cone_setup());
+  EXPECT_FALSE(untimed.branches[0].result.hold);
+  EXPECT_EQ(untimed.branches[0].result.fit.stiffness, a.fit.stiffness);
+}
+
 TEST_F(MeasuredCurve, TheCliWritesAnalysisJsonWithUnits) {
   const auto file = write("cone.csv", test.csv(1e-9, 1e-3, "Depth (nm)\tLoad (mN)\tTime (s)"));
   write("berkovich.toml", "[punch]\nshape = \"cone\"\nhalf_angle = 70.3\n[analysis]\nbeta = 1.034\n"
@@ -171,6 +209,15 @@ TEST_F(MeasuredCurve, BadFilesAreRefusedNamingTheFileAndTheProblem) {
   refused("nounits.csv", "depth,load\n0,0\n100,1\n50,0\n", "depth unit is missing");
   refused("badunit.csv", "depth (furlong),load (mN)\n0,0\n100,1\n50,0\n", "not a depth unit");
   refused("short.csv", header + "0,0\n100,1\n90,0.6\n50,0\n", "at least 4");
+  // With a time column: time running back (a hold whose time stands still is fine), a time column
+  // the header lacks, a time without its unit, NaN in the time, one row.
+  const std::string timed = "time (s),depth (nm),load (mN)\n";
+  const std::string with_time = " --time-column time";
+  refused("backwards.csv", timed + "0,0,0\n1,100,1\n1,110,1\n0.5,50,0\n", "row 5", with_time);
+  refused("notime.csv", header + "0,0\n100,1\n50,0\n", "no column \"time\"", with_time);
+  refused("timeunit.csv", "time,depth (nm),load (mN)\n0,0,0\n1,100,1\n2,50,0\n", "time unit is missing", with_time);
+  refused("timenan.csv", timed + "0,0,0\nnan,100,1\n2,50,0\n", "row 3", with_time);
+  refused("onerow.csv", timed + "0,0,0\n", "1 point", with_time);
   // Three columns and none named; no indenter shape.
   const auto three = write("three.csv", "1,2,3\n4,5,6\n");
   EXPECT_EQ(cli("analyze " + three.string() + " --set punch.shape=cone --set punch.half_angle=70.3 --depth-unit nm "

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "indentsim/base/error.hpp"
 #include "indentsim/fitting/forward_model.hpp"
@@ -108,26 +109,34 @@ class LoadTimesCli : public indentsim::testing::CliTest {};
 
 // curve.csv gains each row's time after its step, the run warns that time reaches no law, and a
 // run killed in its hold resumes to the same curve, times included; a resume that moves the
-// times of rows already written is refused by name.
+// times of rows already written is refused by name.  The analysis reads the run's time: its hold
+// has crept by nothing, and Feng and Ngan's correction leaves the stiffness as it is.
 TEST_F(LoadTimesCli, CurveRowsCarryTheirTimeThroughAKillAndAResume) {
   const std::string source = indentsim::testing::source_path("loadcases/axisymmetric/berkovich_cone.toml");
-  const std::string args = " --set mesh.contact_nodes=8 --set load.path=[0,1e-6,1e-6,0.8e-6] "
-                           "--set load.times=[0,10,20,25] --set load.increments=8 "
+  const std::string args = " --set mesh.contact_nodes=8 --set load.path=[0,1e-6,1e-6,0.96e-6] "
+                           "--set load.times=[0,10,20,30] --set load.increments=12 "
                            "--set output.checkpoint_every=2";
   ASSERT_EQ(cli("run " + source + args + " --out " + (dir_ / "full").string()), 0) << err();
   EXPECT_NE(err().find("load.times only labels the increments"), std::string::npos) << err();
   const std::string expected = indentsim::testing::curve_without_timing(dir_ / "full" / "curve.csv");
   EXPECT_EQ(expected.substr(0, expected.find('\n')).rfind("step,time,alpha,P,", 0), 0u) << expected;
-  // 8 increments by duration: 3 loading, 3 holding, 2 unloading; every row at its planned time.
+  // 12 increments by duration: 4 loading, 4 holding, 4 unloading; every row at its planned time.
   const std::vector<std::vector<double>> rows = indentsim::testing::read_curve(dir_ / "full" / "curve.csv");
-  ASSERT_EQ(rows.size(), 9u);
-  const std::vector<double> planned{0.0, 10.0 / 3, 20.0 / 3, 10.0, 40.0 / 3, 50.0 / 3, 20.0, 22.5, 25.0};
-  for (std::size_t k = 0; k < rows.size(); ++k) EXPECT_NEAR(rows[k][1], planned[k], 1e-12 * 25.0) << k;
+  ASSERT_EQ(rows.size(), 13u);
+  for (std::size_t k = 0; k < rows.size(); ++k) EXPECT_NEAR(rows[k][1], 2.5 * static_cast<double>(k), 1e-12 * 30.0) << k;
+
+  ASSERT_EQ(cli("analyze " + (dir_ / "full").string()), 0) << err();
+  const auto json = nlohmann::json::parse(indentsim::testing::slurp(dir_ / "full" / "analysis.json"));
+  const auto& hold = json["branches"][0]["hold"];
+  ASSERT_TRUE(hold.is_object()) << json["branches"][0].dump();
+  EXPECT_DOUBLE_EQ(hold["duration_s"].get<double>(), 10.0);
+  EXPECT_NEAR(hold["creep_depth"].get<double>(), 0.0, 1e-12 * 1e-6);
+  EXPECT_NEAR(hold["S_corrected"].get<double>() / json["branches"][0]["S_fit"].get<double>(), 1.0, 1e-9);
 
   const fs::path out = dir_ / "killed";
-  EXPECT_EQ(cli("run " + source + args + " --quiet --out " + out.string(), "INDENTSIM_FAULT=increment:5"),
+  EXPECT_EQ(cli("run " + source + args + " --quiet --out " + out.string(), "INDENTSIM_FAULT=increment:7"),
             128 + SIGKILL);
-  EXPECT_EQ(cli("resume " + (out / "checkpoints").string() + " --quiet --set load.times=[0,10,30,35]"), 2);
+  EXPECT_EQ(cli("resume " + (out / "checkpoints").string() + " --quiet --set load.times=[0,10,30,40]"), 2);
   EXPECT_NE(err().find("load.times"), std::string::npos) << err();
   ASSERT_EQ(cli("resume " + (out / "checkpoints").string() + " --quiet"), 0) << err();
   EXPECT_EQ(indentsim::testing::curve_without_timing(out / "curve.csv"), expected);

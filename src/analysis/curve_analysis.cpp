@@ -84,7 +84,9 @@ void analyze_branches(CurveAnalysis& c, const std::vector<CurveBranch>& branches
   for (const CurveBranch& b : branches) {
     const std::string label = label_of(b);
     try {
-      c.branches.push_back({b, label, analyze_branch(c.depth, c.force, b, context, truth_of(b))});
+      BranchAnalysis a = analyze_branch(c.depth, c.force, b, context, truth_of(b));
+      a.hold = analyze_hold(c.time, c.depth, c.force, b, a.fit.stiffness, context);
+      c.branches.push_back({b, label, std::move(a)});
     } catch (const AnalysisError& e) {
       throw InputError(c.curve_file.string(), "unloading " + label, e.what());
     }
@@ -116,7 +118,9 @@ CurveAnalysis analyze_run_curve(const fs::path& path, const std::vector<std::str
                        "a run's analysis takes analysis.* keys only: its indenter and material are the run's own "
                        "(case.toml)");
   const LoadCase lc = read_load_case(dir / "case.toml", overrides);
-  const LoadDepthCurve curve = read_curve_csv(dir / "curve.csv", CurveColumns{"alpha", "P", "m", "N"});
+  // A run whose path is in time writes its time column (docs/MODEL.md §13.2).
+  const LoadDepthCurve curve = read_curve_csv(
+      dir / "curve.csv", CurveColumns{"alpha", "P", "m", "N", lc.load.times.empty() ? "" : "time", "s"});
 
   CurveAnalysis c;
   c.curve_file = dir / "curve.csv";
@@ -127,6 +131,7 @@ CurveAnalysis analyze_run_curve(const fs::path& path, const std::vector<std::str
   c.specimen_nu = lc.material.nu;
   c.depth = curve.depth;
   c.force = curve.force;
+  c.time = curve.time;
   const std::vector<CurveBranch> branches = unloading_branches(c.depth);
   if (branches.empty())
     throw InputError(c.curve_file.string(), "curve",
@@ -175,7 +180,8 @@ CurveAnalysis analyze_curve(const fs::path& curve, std::vector<std::string> over
   if (!fs::is_regular_file(curve, ec))
     throw InputError(curve.string(), "curve", "is neither a run's output folder nor a CSV file of a load-depth curve");
   for (const auto& [key, value] : {std::pair{"curve.depth_column", o.depth_column}, {"curve.force_column", o.force_column},
-                                   {"curve.depth_unit", o.depth_unit}, {"curve.force_unit", o.force_unit}})
+                                   {"curve.depth_unit", o.depth_unit}, {"curve.force_unit", o.force_unit},
+                                   {"curve.time_column", o.time_column}, {"curve.time_unit", o.time_unit}})
     if (!value.empty()) overrides.push_back(std::string(key) + "=" + toml_string(value));
   const AnalysisSetup setup = read_analysis_setup(
       o.indenter_file.empty() ? std::nullopt : std::optional<fs::path>(o.indenter_file), overrides);
@@ -194,6 +200,7 @@ CurveAnalysis analyze_measured_curve(const fs::path& csv, const AnalysisSetup& s
   c.force_unit = curve.force_unit;
   c.depth = curve.depth;
   c.force = curve.force;
+  c.time = curve.time;
   std::vector<CurveBranch> branches;
   try {
     branches = measured_unloading_branches(c.depth, c.force, c.settings, curve.rows);
@@ -255,6 +262,18 @@ std::string analysis_table(const CurveAnalysis& c) {
       t += fmt::format("    true contact: radius {:.5g} m, H = {} Pa, E_r = {} Pa, pile-up ratio A_true/A_c = {}\n",
                        *a.true_contact_radius, value(a.true_hardness), value(a.true_reduced_modulus),
                        value(a.pile_up_ratio));
+    if (a.hold) {
+      const HoldAnalysis& h = *a.hold;
+      t += fmt::format("    hold before it: {:.4g} s, creep {:.5g} m, dh/dt at its end {:.4g} m/s", h.duration,
+                       h.creep_depth, h.depth_rate);
+      if (h.unloading_rate) t += fmt::format(", unloading at {:.4g} {}/s", *h.unloading_rate, force);
+      t += "\n";
+      if (h.corrected)
+        t += fmt::format("    corrected for creep (Feng-Ngan): S = {:.5g} {}   h_c = {:.5g} m   H = {:.5g} Pa   E_r = {} Pa"
+                         "   E = {} Pa\n",
+                         *h.stiffness, stiffness, h.corrected->h_c, h.corrected->hardness,
+                         value(h.corrected->reduced_modulus), value(h.corrected->specimen_modulus));
+    }
     if (!axi) t += "    E_r: not defined in plane strain (a half-plane's compliance depends on the specimen size)\n";
   }
   return t;

@@ -196,6 +196,87 @@ double work(const std::vector<double>& depth, const std::vector<double>& force, 
 
 }  // namespace
 
+ContactOfStiffness contact_of_stiffness(double P_max, double h_max, double stiffness, const AnalysisContext& context) {
+  ContactOfStiffness a;
+  // A flat punch's contact does not shrink on unloading: its area is the punch's, h_c = h_max.
+  a.h_c = h_max - contact_depth_factor(context) * P_max / stiffness;
+  const auto rim = context.punch->rim();
+  a.contact_radius = rim ? *rim : (a.h_c > 0.0 ? context.punch->geometric_contact_radius(a.h_c) : 0.0);
+  if (!rim && a.h_c > 0.0 && !(context.punch->surface_height(a.contact_radius) >= a.h_c * (1.0 - 1e-9)))
+    throw AnalysisError(
+        context.shape == PunchShapeKind::area_function
+            ? fmt::format("the contact depth h_c = {:g} m is where punch.area_coefficients give no growing positive "
+                          "area (A = pi r^2 with r = {:g} m): the calibration does not hold at this depth",
+                          a.h_c, a.contact_radius)
+            : fmt::format("the contact depth h_c = {:g} m lies beyond the indenter's shape ({}): no area function "
+                          "there",
+                          a.h_c, context.punch->name()));
+  if (!rim && !(a.h_c > 0.0))
+    throw AnalysisError(fmt::format("the contact depth h_c = h_max - epsilon P_max / S = {:g} m is not positive: the "
+                                    "unloading is too compliant for Oliver-Pharr (S = {:g} N/m)",
+                                    a.h_c, stiffness));
+  a.area = projected_area(context.scene, a.contact_radius);
+  if (a.area > 0.0) a.hardness = P_max / a.area;
+  if (context.scene == SceneKind::axisymmetric && a.area > 0.0) {
+    a.reduced_modulus = std::sqrt(std::numbers::pi) / (2.0 * context.settings.beta) * stiffness / std::sqrt(a.area);
+    if (context.specimen_nu) {
+      const double nu = *context.specimen_nu, nu_i = context.settings.indenter_nu;
+      const double indenter = context.settings.indenter_E ? (1.0 - nu_i * nu_i) / *context.settings.indenter_E : 0.0;
+      const double inverse = 1.0 / *a.reduced_modulus - indenter;
+      if (inverse > 0.0) a.specimen_modulus = (1.0 - nu * nu) / inverse;
+    }
+  }
+  return a;
+}
+
+namespace {
+
+/// The least-squares slope of y against x over indices [first, last].
+double slope_over(const std::vector<double>& x, const std::vector<double>& y, std::size_t first, std::size_t last) {
+  const double n = static_cast<double>(last - first + 1);
+  double mx = 0.0, my = 0.0;
+  for (std::size_t k = first; k <= last; ++k) mx += x[k] / n, my += y[k] / n;
+  double sxy = 0.0, sxx = 0.0;
+  for (std::size_t k = first; k <= last; ++k) sxy += (x[k] - mx) * (y[k] - my), sxx += (x[k] - mx) * (x[k] - mx);
+  return sxx > 0.0 ? sxy / sxx : 0.0;
+}
+
+constexpr double hold_force_tolerance = 5e-3;  // a hold's force stays within 0.5% of the peak's
+constexpr double unloading_rate_window = 0.8;  // the unloading rate is taken down to 80% of P_max
+
+}  // namespace
+
+std::optional<HoldAnalysis> analyze_hold(const std::vector<double>& time, const std::vector<double>& depth,
+                                         const std::vector<double>& force, const CurveBranch& branch, double stiffness,
+                                         const AnalysisContext& context) {
+  if (time.size() != depth.size() || time.empty()) return std::nullopt;
+  const std::size_t peak = branch.peak;
+  const double held = force[peak];
+  if (!(held > 0.0)) return std::nullopt;
+  std::size_t start = peak;
+  while (start > branch.loading_start && std::abs(force[start - 1] - held) <= hold_force_tolerance * held) --start;
+  if (peak - start < 2 || !(time[peak] > time[start])) return std::nullopt;
+  HoldAnalysis hold;
+  hold.start = start;
+  hold.duration = time[peak] - time[start];
+  hold.creep_depth = depth[peak] - depth[start];
+  // The depth rate at the hold's end, over its last half (the creep rate decays through a hold).
+  hold.depth_rate = slope_over(time, depth, peak - std::max<std::size_t>(1, (peak - start) / 2), peak);
+  std::size_t last = peak + 1;
+  while (last + 1 <= branch.end && force[last + 1] >= unloading_rate_window * held) ++last;
+  if (last > branch.end) return hold;
+  const double rate = -slope_over(time, force, peak, last);
+  if (!(rate > 0.0)) return hold;
+  hold.unloading_rate = rate;
+  // The depth rate at the start of unloading is P'_u / S_e + h'_hold with P'_u < 0; S = P'_u / h'
+  // then gives 1/S_e = 1/S + h'_hold / |P'_u| (MODEL.md §13.4 says why the sign is +).
+  const double compliance = 1.0 / stiffness + hold.depth_rate / rate;
+  if (!(compliance > 0.0)) return hold;
+  hold.stiffness = 1.0 / compliance;
+  hold.corrected = contact_of_stiffness(force[peak], depth[peak], *hold.stiffness, context);
+  return hold;
+}
+
 BranchAnalysis analyze_branch(const std::vector<double>& depth, const std::vector<double>& force,
                               const CurveBranch& branch, const AnalysisContext& context,
                               const std::optional<TrueContact>& truth) {
@@ -211,33 +292,17 @@ BranchAnalysis analyze_branch(const std::vector<double>& depth, const std::vecto
   a.total_work = work(depth, force, branch.loading_start, branch.peak);
   a.elastic_work = work(depth, force, branch.peak, branch.end);
 
-  // A flat punch's contact does not shrink on unloading: its area is the punch's, h_c = h_max.
-  a.h_c = a.h_max - contact_depth_factor(context) * a.P_max / a.fit.stiffness;
-  const auto rim = context.punch->rim();
-  a.contact_radius = rim ? *rim : (a.h_c > 0.0 ? context.punch->geometric_contact_radius(a.h_c) : 0.0);
-  if (!rim && a.h_c > 0.0 && !(context.punch->surface_height(a.contact_radius) >= a.h_c * (1.0 - 1e-9)))
-    throw AnalysisError(fmt::format("the contact depth h_c = {:g} m lies beyond the indenter's shape ({}): no area "
-                                    "function there",
-                                    a.h_c, context.punch->name()));
-  if (!rim && !(a.h_c > 0.0))
-    throw AnalysisError(fmt::format("the contact depth h_c = h_max - epsilon P_max / S = {:g} m is not positive: the "
-                                    "unloading is too compliant for Oliver-Pharr (S = {:g} N/m)",
-                                    a.h_c, a.fit.stiffness));
-  a.area = projected_area(context.scene, a.contact_radius);
+  const ContactOfStiffness contact = contact_of_stiffness(a.P_max, a.h_max, a.fit.stiffness, context);
+  a.h_c = contact.h_c;
+  a.contact_radius = contact.contact_radius;
+  a.area = contact.area;
+  a.hardness = contact.hardness;
+  a.reduced_modulus = contact.reduced_modulus;
+  a.specimen_modulus = contact.specimen_modulus;
   const bool axisymmetric = context.scene == SceneKind::axisymmetric;
-  if (a.area > 0.0) a.hardness = a.P_max / a.area;
   const auto modulus = [&](double S, double area) {
     return std::sqrt(std::numbers::pi) / (2.0 * context.settings.beta) * S / std::sqrt(area);
   };
-  if (axisymmetric && a.area > 0.0) {
-    a.reduced_modulus = modulus(a.fit.stiffness, a.area);
-    if (context.specimen_nu) {
-      const double nu = *context.specimen_nu, nu_i = context.settings.indenter_nu;
-      const double indenter = context.settings.indenter_E ? (1.0 - nu_i * nu_i) / *context.settings.indenter_E : 0.0;
-      const double inverse = 1.0 / *a.reduced_modulus - indenter;
-      if (inverse > 0.0) a.specimen_modulus = (1.0 - nu * nu) / inverse;
-    }
-  }
   if (truth) {
     a.exact_stiffness = truth->stiffness;
     a.true_contact_radius = truth->half_width;
@@ -289,20 +354,41 @@ nlohmann::ordered_json branch_json(const BranchAnalysis& a, const AnalysisContex
   j["true_H"] = number_or_null(a.true_hardness);
   j["true_E_r"] = number_or_null(a.true_reduced_modulus);
   j["pile_up_ratio"] = number_or_null(a.pile_up_ratio);
+  if (a.hold) {
+    const HoldAnalysis& h = *a.hold;
+    nlohmann::ordered_json hold{{"start_index", h.start},       {"duration_s", h.duration},
+                                {"creep_depth", h.creep_depth}, {"depth_rate_at_end", h.depth_rate},
+                                {"unloading_rate", number_or_null(h.unloading_rate)},
+                                {"S_corrected", number_or_null(h.stiffness)}};
+    if (h.corrected) {
+      hold["h_c_corrected"] = h.corrected->h_c;
+      hold["A_c_corrected"] = h.corrected->area;
+      hold["H_corrected"] = h.corrected->hardness;
+      hold["E_r_corrected"] = number_or_null(h.corrected->reduced_modulus);
+      hold["E_corrected"] = number_or_null(h.corrected->specimen_modulus);
+    }
+    hold["correction"] = "Feng and Ngan 2002: 1/S_corrected = 1/S_fit + depth_rate_at_end / unloading_rate";
+    j["hold"] = hold;
+  } else {
+    j["hold"] = nullptr;
+  }
   return j;
 }
 
 nlohmann::ordered_json analysis_units(SceneKind scene) {
   if (scene == SceneKind::axisymmetric)
-    return {{"depth", "m"},    {"force", "N"},       {"stiffness", "N/m"}, {"area", "m^2"},
-            {"stress", "Pa"},  {"work", "J"},        {"B", "N/m^m"}};
+    return {{"depth", "m"}, {"force", "N"}, {"stiffness", "N/m"}, {"area", "m^2"}, {"stress", "Pa"},
+            {"work", "J"},  {"B", "N/m^m"}, {"time", "s"}, {"depth_rate", "m/s"}, {"force_rate", "N/s"}};
   return {{"depth", "m"},
           {"force", "N/m (per unit thickness)"},
           {"stiffness", "N/m per m"},
           {"area", "m (the contact width 2a)"},
           {"stress", "Pa"},
           {"work", "J/m"},
-          {"B", "N/m per m^m"}};
+          {"B", "N/m per m^m"},
+          {"time", "s"},
+          {"depth_rate", "m/s"},
+          {"force_rate", "N/m/s"}};
 }
 
 }  // namespace indentsim

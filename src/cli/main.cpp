@@ -599,7 +599,7 @@ int command_keys(bool markdown) {
 int main(int argc, char** argv) {
   stop_idle_blas_workers();  // one thread of our own: OpenBLAS's idle workers only spin (worker_threads.hpp)
   CLI::App app{"indentsim: indentation of an elasto-plastic specimen by a rigid punch (plane strain or axisymmetric; "
-               "sphere, cone, flat or measured profile)"};
+               "sphere, cone, flat, measured profile or calibrated area function)"};
   app.require_subcommand(1);
   app.set_version_flag("--version", version_line());
   std::string file, out;
@@ -657,6 +657,9 @@ int main(int argc, char** argv) {
   analyze->add_option("--force-column", analyze_options.force_column, "measured curve: the force column's header name");
   analyze->add_option("--depth-unit", analyze_options.depth_unit, "measured curve: nm, um, mm or m (else from the header)");
   analyze->add_option("--force-unit", analyze_options.force_unit, "measured curve: mN, uN, nN or N (else from the header)");
+  analyze->add_option("--time-column", analyze_options.time_column,
+                      "measured curve: the time column's header name (holds: creep and Feng-Ngan's correction)");
+  analyze->add_option("--time-unit", analyze_options.time_unit, "measured curve: s, ms or min (else from the header)");
   analyze->add_option("--out", analysis_out, "analysis.json's path (default: the run's folder, or NAME.analysis.json "
                                                     "beside a measured file)");
   analyze->add_flag("--plot", analysis_plot, "also draw the figure (PNG and SVG beside analysis.json)");

@@ -31,7 +31,9 @@ AnalysisSetup read_analysis_setup(const std::optional<std::filesystem::path>& fi
   const std::pair<const char*, std::string*> curve_keys[] = {{"depth_column", &setup.columns.depth_column},
                                                              {"force_column", &setup.columns.force_column},
                                                              {"depth_unit", &setup.columns.depth_unit},
-                                                             {"force_unit", &setup.columns.force_unit}};
+                                                             {"force_unit", &setup.columns.force_unit},
+                                                             {"time_column", &setup.columns.time_column},
+                                                             {"time_unit", &setup.columns.time_unit}};
   for (const auto& [name, target] : curve_keys) keys.push_back(KeyDeclaration{"curve", name, "string", "", "", ""});
 
   const Reader r(root, source, file ? folder_of(*file) : std::filesystem::current_path());
@@ -46,11 +48,14 @@ AnalysisSetup read_analysis_setup(const std::optional<std::filesystem::path>& fi
   if (!setup.columns.depth_unit.empty() && depth_unit_factor(setup.columns.depth_unit) == 0.0)
     r.fail("curve.depth_unit", fmt::format("\"{}\" is not a depth unit (accepted: nm, um, mm, m)",
                                            printable(setup.columns.depth_unit, 20)));
+  if (!setup.columns.time_unit.empty() && time_unit_factor(setup.columns.time_unit) == 0.0)
+    r.fail("curve.time_unit", fmt::format("\"{}\" is not a time unit (accepted: s, ms, min)",
+                                          printable(setup.columns.time_unit, 20)));
   if (!setup.columns.force_unit.empty() && force_unit_factor(setup.columns.force_unit) == 0.0)
     r.fail("curve.force_unit", fmt::format("\"{}\" is not a force unit (accepted: mN, uN, nN, N)",
                                            printable(setup.columns.force_unit, 20)));
   if (!r.find("punch", "shape"))
-    r.fail("punch.shape", "missing key: the indenter's shape (sphere, cone, flat or profile) gives the area function "
+    r.fail("punch.shape", "missing key: the indenter's shape (sphere, cone, flat, profile or area_function) gives the area function "
                           "A(h_c) (--indenter FILE, or --set punch.shape=...)");
   check_punch_keys(r, lc);
   validate_punch_shape(lc);

@@ -68,6 +68,13 @@ double force_unit_factor(const std::string& unit) {
   return 0.0;
 }
 
+double time_unit_factor(const std::string& unit) {
+  if (unit == "s") return 1.0;
+  if (unit == "ms") return 1e-3;
+  if (unit == "min") return 60.0;
+  return 0.0;
+}
+
 bool is_per_length_force_unit(const std::string& unit) {
   return unit.size() > 2 && unit.compare(unit.size() - 2, 2, "/m") == 0 && force_unit_factor(unit.substr(0, unit.size() - 2)) != 0.0;
 }
@@ -90,6 +97,9 @@ LoadDepthCurve read_curve_csv(const std::filesystem::path& file, const CurveColu
   if (named && (columns.depth_column.empty() || columns.force_column.empty()))
     fail(columns.depth_column.empty() ? "curve.depth_column" : "curve.force_column",
          "name both columns (curve.depth_column and curve.force_column), or neither for a two-column file");
+  if (!columns.time_column.empty() && !named)
+    fail("curve.time_column", "a time column is read beside named depth and force columns: name them too "
+                              "(curve.depth_column and curve.force_column)");
   const auto find_column = [&](const std::vector<std::string>& header, const std::string& wanted) -> std::optional<std::size_t> {
     for (std::size_t c = 0; c < header.size(); ++c)
       if (lower(trim(header[c])) == lower(trim(wanted)) || lower(name_and_unit(header[c]).first) == lower(trim(wanted)))
@@ -128,6 +138,14 @@ LoadDepthCurve read_curve_csv(const std::filesystem::path& file, const CurveColu
                        header_row ? fmt::format("; the header holds {}", join_fields(rows[*header_row])) : ""));
   }
 
+  std::optional<std::size_t> time_col;
+  if (!columns.time_column.empty()) {
+    time_col = find_column(rows[*header_row], columns.time_column);
+    if (!time_col)
+      fail("curve.time_column", fmt::format("the header row (row {}) has no column \"{}\": it holds {}", *header_row + 1,
+                                            printable(columns.time_column, 40), join_fields(rows[*header_row])));
+  }
+
   if (header_row)
     for (const auto& field : rows[*header_row])
       if (std::any_of(field.begin(), field.end(), [](char c) { return static_cast<unsigned char>(c) < 0x20 && c != '\t'; }))
@@ -162,24 +180,39 @@ LoadDepthCurve read_curve_csv(const std::filesystem::path& file, const CurveColu
                          : unit_of(columns.force_unit, force_col, "curve.force_unit", "force", force_unit_factor,
                                    "mN, uN, nN, N", columns.default_force_unit);
   curve.force_unit_declared = declared;
+  if (time_col)
+    curve.time_unit = unit_of(columns.time_unit, *time_col, "curve.time_unit", "time", time_unit_factor, "s, ms, min", "");
   const double depth_scale = depth_unit_factor(curve.depth_unit),
-               force_scale = force_or_per_length_unit_factor(curve.force_unit);
+               force_scale = force_or_per_length_unit_factor(curve.force_unit),
+               time_scale = time_col ? time_unit_factor(curve.time_unit) : 0.0;
 
   // The numbers: every row after the header, both columns finite numbers.
   const std::string depth_name = header_row ? printable(trim(rows[*header_row][depth_col]), 40) : "1";
   const std::string force_name = header_row ? printable(trim(rows[*header_row][force_col]), 40) : "2";
+  const std::string time_name = time_col ? printable(trim(rows[*header_row][*time_col]), 40) : "";
   for (std::size_t k = header_row ? *header_row + 1 : 0; k < rows.size(); ++k) {
     const auto& row = rows[k];
     if (blank_or_comment(row)) continue;
-    double h = 0.0, P = 0.0;
-    for (const auto& [col, column_name, value] :
-         {std::tuple{depth_col, depth_name, &h}, std::tuple{force_col, force_name, &P}}) {
+    double h = 0.0, P = 0.0, t = 0.0;
+    std::vector<std::tuple<std::size_t, std::string, double*>> wanted{{depth_col, depth_name, &h},
+                                                                      {force_col, force_name, &P}};
+    if (time_col) wanted.emplace_back(*time_col, time_name, &t);
+    for (const auto& [col, column_name, value] : wanted) {
       if (col >= row.size())
         fail(fmt::format("row {}", k + 1),
              fmt::format("has {} fields; column \"{}\" is missing", row.size(), column_name));
       if (!parse_csv_number(row[col], *value))
         fail(fmt::format("row {}", k + 1), fmt::format("column \"{}\": \"{}\" is not a finite number", column_name,
                                                        printable(trim(row[col]), 40)));
+    }
+    if (time_col) {
+      // A hold's time goes on while its depth or force stands still: time never runs back.
+      if (!curve.time.empty() && t * time_scale < curve.time.back())
+        fail(fmt::format("row {}", k + 1),
+             fmt::format("column \"{}\": time {:g} {} comes before the row above it ({:g} {}): the rows are not in "
+                         "the order of time",
+                         time_name, t, curve.time_unit, curve.time.back() / time_scale, curve.time_unit));
+      curve.time.push_back(t * time_scale);
     }
     curve.depth.push_back(h * depth_scale);
     curve.force.push_back(P * force_scale);

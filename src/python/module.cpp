@@ -309,7 +309,9 @@ PYBIND11_MODULE(_indentsim, m) {
       .def_readwrite("depth_column", &MeasuredCurveOptions::depth_column)
       .def_readwrite("force_column", &MeasuredCurveOptions::force_column)
       .def_readwrite("depth_unit", &MeasuredCurveOptions::depth_unit)
-      .def_readwrite("force_unit", &MeasuredCurveOptions::force_unit);
+      .def_readwrite("force_unit", &MeasuredCurveOptions::force_unit)
+      .def_readwrite("time_column", &MeasuredCurveOptions::time_column)
+      .def_readwrite("time_unit", &MeasuredCurveOptions::time_unit);
 
   py::class_<FitCommandLine>(m, "FitCommandLine")
       .def(py::init<>())

@@ -40,6 +40,7 @@ struct CurveAnalysis {
   std::optional<double> specimen_nu;
   std::string depth_unit = "m", force_unit = "N";  ///< the units the file was read in
   std::vector<double> depth, force;                ///< the whole curve [m], [N] (or N/m)
+  std::vector<double> time;                        ///< [s], or empty: a curve without time
   std::vector<AnalyzedBranch> branches;
 };
 
@@ -59,10 +60,10 @@ CurveAnalysis analyze_measured_curve(const std::filesystem::path& csv, const Ana
 /// How a measured curve is read (`indentsim analyze`'s flags): the indenter file and the
 /// columns and units, each "" when not given.
 struct MeasuredCurveOptions {
-  std::string indenter_file, depth_column, force_column, depth_unit, force_unit;
+  std::string indenter_file, depth_column, force_column, depth_unit, force_unit, time_column, time_unit;
   bool given() const {
     return !indenter_file.empty() || !depth_column.empty() || !force_column.empty() || !depth_unit.empty() ||
-           !force_unit.empty();
+           !force_unit.empty() || !time_column.empty() || !time_unit.empty();
   }
 };
 

@@ -70,6 +70,30 @@ struct TrueContact {
   double half_width = 0.0;          ///< contact radius (half-width) of the contact solution [m]
 };
 
+/// What Oliver and Pharr read off a peak (P_max, h_max) and an unloading stiffness S: the contact
+/// depth h_c = h_max - epsilon P_max / S, its radius and projected area, H and E_r.
+struct ContactOfStiffness {
+  double h_c = 0.0, contact_radius = 0.0, area = 0.0, hardness = 0.0;
+  std::optional<double> reduced_modulus, specimen_modulus;
+};
+
+/// A hold at the peak force before an unloading, in a curve with time (docs/MODEL.md §13.4): the
+/// rows before the peak whose force stays within 0.5% of the peak's, at least three of them over
+/// a positive time.
+struct HoldAnalysis {
+  std::size_t start = 0;        ///< index of the hold's first point; its last is the branch's peak
+  double duration = 0.0;        ///< [s]
+  double creep_depth = 0.0;     ///< the depth gained over the hold [m]
+  double depth_rate = 0.0;      ///< dh/dt at its end [m/s]: least squares over its last half
+  std::optional<double> unloading_rate;  ///< |dP/dt| at the start of unloading [N/s]: least squares
+                                         ///< over the unloading down to 80% of P_max
+  /// Feng and Ngan's (J. Mater. Res. 17, 2002) stiffness corrected for creep,
+  /// 1/S_e = 1/S + depth_rate / unloading_rate, and the analysis with it; none without an
+  /// unloading rate, or when the correction leaves no positive compliance.
+  std::optional<double> stiffness;
+  std::optional<ContactOfStiffness> corrected;
+};
+
 struct BranchAnalysis {
   double P_max = 0.0, h_max = 0.0;
   PowerLawFit fit;
@@ -83,6 +107,7 @@ struct BranchAnalysis {
   // With a simulated run's true contact:
   std::optional<double> exact_stiffness, true_contact_radius, true_area, true_hardness, true_reduced_modulus,
       pile_up_ratio;
+  std::optional<HoldAnalysis> hold;  ///< with time, a hold before the peak (analyze_hold)
 };
 
 /// The settings and the indenter the analysis needs.
@@ -97,9 +122,19 @@ struct AnalysisContext {
 /// epsilon of Oliver and Pharr for the shape, unless the settings give one.
 double contact_depth_factor(const AnalysisContext& context);
 
+/// Oliver and Pharr's contact at (P_max, h_max) with stiffness S; throws AnalysisError where the
+/// contact depth is not positive or lies beyond the indenter's shape.
+ContactOfStiffness contact_of_stiffness(double P_max, double h_max, double stiffness, const AnalysisContext& context);
+
 BranchAnalysis analyze_branch(const std::vector<double>& depth, const std::vector<double>& force,
                               const CurveBranch& branch, const AnalysisContext& context,
                               const std::optional<TrueContact>& truth = std::nullopt);
+
+/// The hold before the branch's peak in a curve with `time` [s] (one per point), and Feng and
+/// Ngan's correction of the branch's stiffness S for its creep; none without a hold.
+std::optional<HoldAnalysis> analyze_hold(const std::vector<double>& time, const std::vector<double>& depth,
+                                         const std::vector<double>& force, const CurveBranch& branch, double stiffness,
+                                         const AnalysisContext& context);
 
 /// The branch's numbers as a JSON object, SI (analysis_units says which).
 nlohmann::ordered_json branch_json(const BranchAnalysis& analysis, const AnalysisContext& context);

@@ -17,6 +17,9 @@ namespace indentsim {
 struct CurveColumns {
   std::string depth_column, force_column;  ///< header names; both "" for a two-column file
   std::string depth_unit, force_unit;      ///< "" : from the header
+  /// The time column's header name ("" : the curve is read without time); it needs the depth and
+  /// force columns named too.  Its unit (s, ms, min) given, or from the header.
+  std::string time_column, time_unit;
   /// Units taken when neither given nor in the header ("" : such a file is refused).  The fit
   /// reads its data in SI by default (m, and the case's force unit).
   std::string default_depth_unit, default_force_unit;
@@ -27,15 +30,19 @@ struct CurveColumns {
 
 struct LoadDepthCurve {
   std::vector<double> depth, force;  ///< [m], [N] (a plane-strain run's force: N/m)
+  std::vector<double> time;          ///< [s], never decreasing; empty without a time column
   std::vector<std::size_t> rows;     ///< the CSV row (from 1) of each point, for messages
   std::string depth_unit, force_unit;  ///< the units the file was read in
+  std::string time_unit;               ///< "" without a time column
   /// The force unit was given (CurveColumns::force_unit) or written in the header, not the default.
   bool force_unit_declared = false;
 };
 
-/// Scale factor of a depth unit to metres / a force unit to newtons; 0 when not a known unit.
+/// Scale factor of a depth unit to metres / a force unit to newtons / a time unit to seconds; 0
+/// when not a known unit.
 double depth_unit_factor(const std::string& unit);
 double force_unit_factor(const std::string& unit);
+double time_unit_factor(const std::string& unit);
 /// A force per unit length ("N/m", "mN/m", ...) to N/m, or a force to N; 0 when neither.
 double force_or_per_length_unit_factor(const std::string& unit);
 /// True for a force per unit length ("N/m", "mN/m", ...).
