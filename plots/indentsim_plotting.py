@@ -330,6 +330,8 @@ def indenter_words(case, omit=()):
         c = punch.get("area_coefficients") or []
         if "punch.area_coefficients" in omit or not c:
             return "calibrated tip (area function)"
+        if not c[0]:
+            return "calibrated tip (area function)"
         return f"calibrated tip, A = {number(c[0], 3)} h²" + (" + …" if any(c[1:]) else "")
     return shape
 

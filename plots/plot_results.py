@@ -131,10 +131,14 @@ def area_function_height(coefficients, x):
     if target == 0.0:
         return 0.0
     lo, hi = 0.0, 1e-15
-    while area(hi) < target:
-        lo, hi = hi, 2 * hi
-        if hi > 1.0:
+    for _ in range(400):  # as AreaFunctionPunch::surface_height
+        if area(hi) >= target:
+            break
+        if area(hi) > 0.0 and area(hi * (1 + 1e-9)) <= area(hi):
             return None
+        lo, hi = hi, 2 * hi
+    else:
+        return None
     for _ in range(200):
         mid = 0.5 * (lo + hi)
         if area(mid) >= target:
@@ -490,7 +494,7 @@ def analysis_case(report):
     punch = {"shape": ind.get("shape", "sphere")}
     if "half_angle_degrees" in ind:
         punch["half_angle"] = ind["half_angle_degrees"]
-    for k in ("tip_radius", "radius", "profile"):
+    for k in ("tip_radius", "radius", "profile", "area_coefficients"):
         if k in ind:
             punch[k] = ind[k]
     return {"geometry": {"kind": report.get("scene", "axisymmetric")}, "punch": punch}, {}, None

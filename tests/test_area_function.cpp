@@ -48,6 +48,16 @@ TEST(AreaFunctionTip, TheIdealBerkovichAreaFunctionIsTheEquivalentConeToRoundOff
   EXPECT_NEAR(tip.slope(0.0), cone.slope(0.0), 1e-14);
   EXPECT_NEAR(tip.geometric_contact_radius(1e-6), cone.geometric_contact_radius(1e-6), 1e-12 * 2.8e-6);
 
+  // A calibration whose area is negative below a picometre (a small negative C2): the profile is
+  // found above it, where the area is positive and grows.
+  const std::vector<double> calibrated{24.5, 1e-7, -1e-14};
+  const AreaFunctionPunch rounded(calibrated);
+  for (const double r : {1e-8, 1e-7, 1e-6}) {
+    const double g = rounded.surface_height(r);
+    ASSERT_TRUE(std::isfinite(g)) << r;
+    EXPECT_NEAR(area_function_area(calibrated, g), std::numbers::pi * r * r, 1e-12 * std::numbers::pi * r * r) << r;
+  }
+
   const std::vector<std::string> mesh{"mesh.contact_nodes=8", "mesh.contact_half_width=3.2e-6",
                                       "mesh.error_estimate=off", "load.path=[0, 1e-6, 0.9e-6]",
                                       "load.increments=[5, 2]"};

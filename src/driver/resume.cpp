@@ -123,17 +123,23 @@ ResumedRun resume_from(const Checkpoint& c, const std::string& source, const std
   const std::unique_ptr<LoadControl> control = LoadControl::of(stored);
   const std::size_t done = static_cast<std::size_t>(c.state.next_target);
   if (done == 0 || done > before.size()) fail("its state does not fit its own load path");
-  // The rows written keep their times (curve.csv's time column is continued, not rewritten).
+  // The rows written keep their times (curve.csv's time column is continued, not rewritten).  With
+  // the path's waypoints kept, a plan moved by other times (a total spread by duration) is the
+  // times' doing, and named so.
   const std::vector<double> times_before = plan_times(stored.load), times_after = plan_times(run.load_case.load);
-  if (times_before.empty() != times_after.empty() ||
-      (!times_before.empty() &&
-       (times_after.size() < done || !std::equal(times_before.begin(), times_before.begin() + static_cast<std::ptrdiff_t>(done),
-                                                 times_after.begin()))))
+  const bool times_kept =
+      times_before.empty() == times_after.empty() &&
+      (times_before.empty() ||
+       (times_after.size() >= done && std::equal(times_before.begin(), times_before.begin() + static_cast<std::ptrdiff_t>(done),
+                                                 times_after.begin())));
+  const bool path_kept =
+      after.size() >= done && std::equal(before.begin(), before.begin() + static_cast<std::ptrdiff_t>(done), after.begin());
+  if (!times_kept && (path_kept || run.load_case.load.path == stored.load.path))
     throw InputError(source, "load.times",
                      fmt::format("must follow the checkpointed history for its first {} increments (up to t = {} s): "
                                  "keep the times of the waypoints up to there, given or not as they were",
                                  done - 1, times_before.empty() ? 0.0 : times_before[done - 1]));
-  if (after.size() < done || !std::equal(before.begin(), before.begin() + static_cast<std::ptrdiff_t>(done), after.begin()))
+  if (!path_kept)
     throw InputError(source, "load.path",
                      fmt::format("must follow the checkpointed history for its first {} increments (up to {}): keep "
                                  "the path's waypoints and increments up to there",

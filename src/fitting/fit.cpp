@@ -1519,7 +1519,8 @@ FitResult fit(const FitProblem& problem) {
       add("sphere", fmt::format("a sphere of radius {:.3g} m to {:.3g} m, {} points", sphere.punch.radius, deepest, points),
           sphere, FitDataKind::force_depth_curve, loading(deepest), true);
     }
-    if (!shapes.count(PunchShapeKind::cone)) {
+    // A calibrated tip's area function is a cone beyond its rounding (sharp_tip): a sharper cone adds more.
+    if (!shapes.count(PunchShapeKind::cone) && !shapes.count(PunchShapeKind::area_function)) {
       LoadCase cone = with_path(at, {0.0, deepest});
       cone.punch = PunchInput{};
       cone.punch.shape = PunchShapeKind::cone;

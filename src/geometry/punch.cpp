@@ -218,11 +218,12 @@ double AreaFunctionPunch::surface_height(double r) const {
   if (ar == 0.0) return 0.0;
   const double target = std::numbers::pi * ar * ar;
   // A bracket [lo, hi] of the depth whose area is the target, by doubling from below any tip's
-  // scale; where the area stops growing before it reaches the target, the tip has no surface
-  // there (validation refuses that within the depths a run reaches).
+  // scale (through depths where a calibration's A is not yet positive); where a positive area
+  // stops growing before it reaches the target, the tip has no surface there (validation refuses
+  // that within the depths a run reaches).
   double lo = 0.0, hi = 1e-15;
   for (int it = 0; area_function_area(c_, hi) < target; ++it) {
-    if (it >= 400 || !(area_function_slope(c_, hi) > 0.0)) return infinity;
+    if (it >= 400 || (area_function_area(c_, hi) > 0.0 && !(area_function_slope(c_, hi) > 0.0))) return infinity;
     lo = hi;
     hi *= 2.0;
   }

@@ -618,8 +618,8 @@ const std::vector<KeyDeclaration>& key_declarations() {
                              "P_max (ISO 14577 practice: 20% to 98%)"},
                             [](auto& c) -> auto& { return c.analysis.fit_range; }));
     k.push_back(optional_number_key({"analysis", "epsilon", "number", "(0, 1]", "",
-                                     "h_c = h_max - epsilon P_max / S (default 0.75 sphere and profile, 0.72 cone, "
-                                     "1 flat)"},
+                                     "h_c = h_max - epsilon P_max / S (default 0.75 sphere, profile and area function, "
+                                     "0.72 cone, 1 flat)"},
                                     [](auto& c) -> auto& { return c.analysis.epsilon; }));
     k.push_back(number_key({"analysis", "beta", "number", "[1, 1.2]", "",
                             "E_r = sqrt(pi) / (2 beta) S / sqrt(A_c) (1 for a body of revolution, 1.034 for a "

@@ -170,7 +170,13 @@ void validate_punch_shape(const LoadCase& lc) {
       throw InputError(lc.source, "punch.tip_radius", fmt::format("must be >= 0 (got {})", punch.tip_radius));
   }
   if (punch.shape == PunchShapeKind::profile) validate_profile(lc, false);
-  if (punch.shape == PunchShapeKind::area_function) validate_area_function(lc, false);
+  if (punch.shape == PunchShapeKind::area_function) {
+    if (lc.geometry.kind != SceneKind::axisymmetric)
+      throw InputError(lc.source, "punch.shape",
+                       "\"area_function\" is the projected area of a tip of revolution (or a pyramid's equal-area "
+                       "cone): plane strain has no such profile; use geometry.kind = \"axisymmetric\", or a profile");
+    validate_area_function(lc, false);
+  }
 }
 
 void validate_analysis(const LoadCase& lc) {
@@ -209,12 +215,7 @@ void validate(const LoadCase& lc) {
                                            punch.tip_radius, cap, lc.geometry.lx));
   }
   if (punch.shape == PunchShapeKind::profile && !lc.load.path.empty()) validate_profile(lc, true);
-  if (punch.shape == PunchShapeKind::area_function) {
-    if (lc.geometry.kind != SceneKind::axisymmetric)
-      fail("punch.shape", "\"area_function\" is the projected area of a tip of revolution (or a pyramid's equal-area "
-                          "cone): plane strain has no such profile; use geometry.kind = \"axisymmetric\", or a profile");
-    validate_area_function(lc, true);
-  }
+  if (punch.shape == PunchShapeKind::area_function) validate_area_function(lc, true);
   // Friction's rows are written beside node-to-rigid's normal rows (docs/MODEL.md §3.3); a finite
   // coefficient's slip rows are unsymmetric, which CHOLMOD's Cholesky cannot factor.
   if (lc.contact.friction > 0.0 && lc.contact.discretization != ContactDiscretizationChoice::node_to_rigid)

@@ -267,7 +267,7 @@ RunOutput::RunOutput(const std::filesystem::path& dir, const LoadCase& load_case
       profile_depths_(load_case.output.profile_depths),
       curve_(dir / "curve.csv", error_estimate, error_estimate_pending, plan_times(load_case.load)),
       fields_(dir),
-      increments_(load_case.load.total_increments()) {
+      increments_(static_cast<int>(plan_increments(load_case.load).size()) - 1) {
   // The rows are the planned targets, one each: the deepest state is the first row at the largest
   // target (a depth, or under force control a force).
   const std::vector<double> targets = plan_increments(load_case.load);

@@ -52,8 +52,9 @@ LoadCase coarse_pilot_case(const LoadCase& lc, double depth) {
   pilot.mesh = MeshInput{};
   pilot.mesh.contact_nodes = 8;
   pilot.mesh.error_estimate = ErrorEstimateChoice::off;
-  if (lc.punch.shape != PunchShapeKind::flat)
-    pilot.mesh.contact_half_width = make_punch(lc.punch)->geometric_contact_radius(depth);
+  if (const double chord = make_punch(lc.punch)->geometric_contact_radius(depth);
+      lc.punch.shape != PunchShapeKind::flat && chord > 0.0)  // (a calibration's A may not be positive yet)
+    pilot.mesh.contact_half_width = chord;
   pilot.solver.tolerance = std::max(lc.solver.tolerance, 1e-9);
   pilot.solver.far_field = FarFieldChoice::full;
   return pilot;

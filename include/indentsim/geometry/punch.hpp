@@ -28,7 +28,7 @@ namespace indentsim {
 class PunchShape {
 public:
   virtual ~PunchShape() = default;
-  /// "sphere" | "cone" | "flat" | "profile", as punch.shape spells it.
+  /// "sphere" | "cone" | "flat" | "profile" | "area_function", as punch.shape spells it.
   virtual std::string name() const = 0;
   /// g(r) >= 0; +inf where the punch has no surface (beyond its rim or its last point).
   virtual double surface_height(double r) const = 0;
