@@ -196,6 +196,13 @@ double work(const std::vector<double>& depth, const std::vector<double>& force, 
 
 }  // namespace
 
+namespace {
+/// Oliver and Pharr's E_r = sqrt(pi) / (2 beta) S / sqrt(A) (J. Mater. Res. 7, 1992, eq. 2).
+double reduced_modulus_of(double stiffness, double area, const AnalysisContext& context) {
+  return std::sqrt(std::numbers::pi) / (2.0 * context.settings.beta) * stiffness / std::sqrt(area);
+}
+}  // namespace
+
 ContactOfStiffness contact_of_stiffness(double P_max, double h_max, double stiffness, const AnalysisContext& context) {
   ContactOfStiffness a;
   // A flat punch's contact does not shrink on unloading: its area is the punch's, h_c = h_max.
@@ -218,7 +225,7 @@ ContactOfStiffness contact_of_stiffness(double P_max, double h_max, double stiff
   a.area = projected_area(context.scene, a.contact_radius);
   if (a.area > 0.0) a.hardness = P_max / a.area;
   if (context.scene == SceneKind::axisymmetric && a.area > 0.0) {
-    a.reduced_modulus = std::sqrt(std::numbers::pi) / (2.0 * context.settings.beta) * stiffness / std::sqrt(a.area);
+    a.reduced_modulus = reduced_modulus_of(stiffness, a.area, context);
     if (context.specimen_nu) {
       const double nu = *context.specimen_nu, nu_i = context.settings.indenter_nu;
       const double indenter = context.settings.indenter_E ? (1.0 - nu_i * nu_i) / *context.settings.indenter_E : 0.0;
@@ -300,16 +307,15 @@ BranchAnalysis analyze_branch(const std::vector<double>& depth, const std::vecto
   a.reduced_modulus = contact.reduced_modulus;
   a.specimen_modulus = contact.specimen_modulus;
   const bool axisymmetric = context.scene == SceneKind::axisymmetric;
-  const auto modulus = [&](double S, double area) {
-    return std::sqrt(std::numbers::pi) / (2.0 * context.settings.beta) * S / std::sqrt(area);
-  };
   if (truth) {
     a.exact_stiffness = truth->stiffness;
     a.true_contact_radius = truth->half_width;
     a.true_area = projected_area(context.scene, truth->half_width);
     if (*a.true_area > 0.0) {
       a.true_hardness = a.P_max / *a.true_area;
-      if (axisymmetric) a.true_reduced_modulus = modulus(truth->stiffness.value_or(a.fit.stiffness), *a.true_area);
+      if (axisymmetric)
+        a.true_reduced_modulus =
+            reduced_modulus_of(truth->stiffness.value_or(a.fit.stiffness), *a.true_area, context);
       if (a.area > 0.0) a.pile_up_ratio = *a.true_area / a.area;
     }
   }
