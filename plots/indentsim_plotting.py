@@ -350,6 +350,12 @@ def material_words(case, summary=None, omit=()):
             words.append(f"ν = {number(m.get('nu', 0.3), 3)}")
         return ", ".join(words)
     text = {"j2": "J2", "ilyushin": "Ilyushin"}.get(model, model)
+    rate = m.get("rate", "none")
+    exponent = "" if "material.rate_exponent" in omit else f" m = {number(m.get('rate_exponent', 0.0), 3)}"
+    if rate == "norton":
+        reference = m.get("reference_stress", 0.0)
+        return (f"{text}, Norton creep{exponent}" +
+                ("" if "material.reference_stress" in omit else f", σ$_{{ref}}$ = {stress_unit(reference).text(reference, 3)}"))
     sy = yield_stress(case, summary)
     if sy and not {"material.yield_stress", "material.e0", "material.E", "material.nu"} & set(omit):
         text += f", σ$_y$ = {stress_unit(sy).text(sy, 3)}"
@@ -358,6 +364,8 @@ def material_words(case, summary=None, omit=()):
         text += ", power-law hardening" + ("" if "material.n" in omit else f" n = {number(m.get('n', 0.0), 3)}")
     elif hardening == "linear":
         text += ", linear hardening" + ("" if "material.kappa" in omit else f" κ = {number(m.get('kappa', 0.0), 3)}")
+    if rate == "perzyna":
+        text += f", Perzyna{exponent}"
     return text
 
 

@@ -9,6 +9,7 @@
 #include "indentsim/base/error.hpp"
 #include "indentsim/input/load_case.hpp"
 #include "indentsim/geometry/mesh.hpp"
+#include "indentsim/simulation/run_configuration.hpp"
 #include "test_support.hpp"
 
 using namespace indentsim;
@@ -41,6 +42,8 @@ TEST(LoadCase, ShippedCasesAreValid) {
     SCOPED_TRACE(entry.path().string());
     LoadCase lc;
     ASSERT_NO_THROW(lc = read_load_case(entry.path()));
+    // A force-controlled case's depth is the depth pilot's (docs/MODEL.md §13.1).
+    if (lc.load.control == LoadControlKind::force) ASSERT_NO_THROW(lc = with_depth_estimate(lc));
     EXPECT_GT(lc.max_depth(), 0.0);
     const MeshPlan plan = plan_mesh(lc);
     EXPECT_GT(plan.unknowns(), 0);

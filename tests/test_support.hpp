@@ -14,6 +14,7 @@
 
 #include <gtest/gtest.h>
 
+#include "indentsim/base/error.hpp"
 #include "indentsim/input/load_case.hpp"
 #include "indentsim/geometry/mesh.hpp"
 #include "indentsim/materials/material.hpp"
@@ -154,6 +155,16 @@ inline double contact_modulus(const LoadCase& lc) { return lc.material.E / (1.0 
 
 inline LoadCase shipped_case(const std::string& name, const std::vector<std::string>& overrides = {}) {
   return read_load_case(source_path("loadcases/" + name), overrides);
+}
+
+/// The key a shipped case read with `overrides` is refused by, or "" when it is taken.
+inline std::string refused_key(const std::string& name, const std::vector<std::string>& overrides) {
+  try {
+    shipped_case(name, overrides);
+  } catch (const InputError& e) {
+    return e.key();
+  }
+  return "";
 }
 
 /// A lx x ly block (or cylinder) graded towards the loaded corner, of the given element kind and scene.

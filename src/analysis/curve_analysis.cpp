@@ -132,7 +132,14 @@ CurveAnalysis analyze_run_curve(const fs::path& path, const std::vector<std::str
   c.depth = curve.depth;
   c.force = curve.force;
   c.time = curve.time;
-  const std::vector<CurveBranch> branches = unloading_branches(c.depth);
+  // The branches in the controlled quantity (run_branch_coordinate): the depth, or the planned
+  // force of each row's step.
+  std::vector<double> controlled = c.depth;
+  if (lc.load.control == LoadControlKind::force) {
+    const std::vector<double> targets = plan_increments(lc.load);
+    for (std::size_t k = 0; k < controlled.size() && k < targets.size(); ++k) controlled[k] = targets[k];
+  }
+  const std::vector<CurveBranch> branches = unloading_branches(controlled);
   if (branches.empty())
     throw InputError(c.curve_file.string(), "curve",
                      "has no unloading branch: the run's load path never turns back (load.path)");

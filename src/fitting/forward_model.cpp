@@ -86,10 +86,14 @@ void refuse_unfittable_load(const LoadCase& lc) {
     throw InputError(lc.source, "load.control",
                      "the fit runs its forward model under depth control at the data's depths: give the case with "
                      "load.control = \"depth\" (fitting a force-controlled protocol is not built yet)");
+  if (lc.material.rate != RateLaw::none)
+    throw InputError(lc.source, "material.rate",
+                     "the fit runs its forward model along the data's depths, without time: a rate-dependent "
+                     "material cannot be fitted yet (fitting a protocol in time is not built)");
   if (!lc.load.times.empty())
     throw InputError(lc.source, "load.times",
                      "the fit runs its forward model along the data's depths, not along the case's path in time: "
-                     "leave load.times out of the fit's case (no material model depends on the rate yet)");
+                     "leave load.times out of the fit's case (a rate-independent material does not need it)");
 }
 
 CurveReduction reduce_to_resolution(FitData& data) {

@@ -153,6 +153,16 @@ KeyDeclaration plausible(KeyDeclaration k, double low, double high, const char* 
   return k;
 }
 
+/// A hardening curve's key, which Norton's creep has no use for (and refuses): not written under it.
+KeyDeclaration hardening_curve_key(KeyDeclaration k) {
+  const auto write = k.write;
+  k.write = [write](const LoadCase& lc) -> std::optional<std::string> {
+    if (lc.material.rate == RateLaw::norton) return std::nullopt;
+    return write(lc);
+  };
+  return k;
+}
+
 const std::vector<KeyDeclaration>& key_declarations() {
   static const std::vector<KeyDeclaration> keys = [] {
     std::vector<KeyDeclaration> k;
@@ -315,7 +325,7 @@ const std::vector<KeyDeclaration>& key_declarations() {
           return std::nullopt;
         return write(lc);
       };
-      k.push_back(e0);
+      k.push_back(hardening_curve_key(e0));
     }
     {
       KeyDeclaration ys{"material", "yield_stress", "number", "> 0", "Pa",
@@ -337,21 +347,21 @@ const std::vector<KeyDeclaration>& key_declarations() {
         if (!lc.material.yield_stress) return {};
         return {*lc.material.yield_stress};
       };
-      k.push_back(ys);
+      k.push_back(hardening_curve_key(ys));
     }
-    k.push_back(choice_key({"material", "hardening", "choice", "", "",
+    k.push_back(hardening_curve_key(choice_key({"material", "hardening", "choice", "", "",
                             "Ilyushin's omega(e_u), both models -- linear: omega = kappa (1 - e0/e_u); power: omega = "
                             "1 - (e0/e_u)^(1-n).  A tensile test's flow stress sigma(eps_p), j2 only -- power_law: "
                             "sigma_y (1 + E eps_p / sigma_y)^n; ludwik: sigma_y + K eps_p^n; swift: K (prestrain + "
                             "eps_p)^n; voce: sigma_y + Q (1 - exp(-b eps_p)); table: hardening_table's points"},
-                           hardening_names, [](auto& c) -> auto& { return c.material.hardening; }));
-    k.push_back(number_key({"material", "kappa", "number", "[0, 1)", "",
+                           hardening_names, [](auto& c) -> auto& { return c.material.hardening; })));
+    k.push_back(hardening_curve_key(number_key({"material", "kappa", "number", "[0, 1)", "",
                             "linear law: post-yield slope of sigma_u(e_u) is (1 - kappa) 3 mu"},
-                           [](auto& c) -> auto& { return c.material.kappa; }));
-    k.push_back(number_key({"material", "n", "number", "[0, 1)", "",
+                           [](auto& c) -> auto& { return c.material.kappa; })));
+    k.push_back(hardening_curve_key(number_key({"material", "n", "number", "[0, 1)", "",
                             "hardening exponent -- power: sigma_u grows as e_u^n beyond e0 (n > 0); power_law, swift "
                             "(n = 0: perfectly plastic), ludwik (n > 0)"},
-                           [](auto& c) -> auto& { return c.material.n; }));
+                           [](auto& c) -> auto& { return c.material.n; })));
     // The flow-stress laws' own parameters: written to case.toml only under their law, required
     // there (check_hardening_keys), refused under another.
     const auto law_number = [&](KeyDeclaration d, auto access, std::initializer_list<HardeningLaw> laws,
@@ -460,6 +470,60 @@ const std::vector<KeyDeclaration>& key_declarations() {
       measure.default_words = "cauchy";
       k.push_back(measure);
     }
+    {
+      KeyDeclaration rate = choice_key({"material", "rate", "choice", "", "",
+                                        "j2's flow rule (docs/MODEL.md §13.3): none (rate-independent); perzyna "
+                                        "(overstress: eps_p' = reference_strain_rate <sigma_e / sigma_y(eps_p) - "
+                                        "1>^rate_exponent, on the hardening curve); norton (power-law creep: eps_p' = "
+                                        "creep_coefficient (sigma_e / reference_stress)^rate_exponent, no yield "
+                                        "surface, the hardening keys refused).  Both need load.times"},
+                                       rate_law_names, [](auto& c) -> auto& { return c.material.rate; });
+      // Written only when a rate is given: a rate-independent case's text (and a sweep's hash of
+      // it) stays what it was before the key existed.
+      const auto write = rate.write;
+      rate.write = [write](const LoadCase& lc) -> std::optional<std::string> {
+        if (lc.material.rate == RateLaw::none) return std::nullopt;
+        return write(lc);
+      };
+      rate.default_words = "none";
+      k.push_back(rate);
+    }
+    // The flow rules' own parameters: written to case.toml only under their rule, required there
+    // (validate_rate), refused under another.
+    const auto rule_number = [&](KeyDeclaration d, auto access, std::initializer_list<RateLaw> rules,
+                                 const char* needed_by) {
+      const std::vector<RateLaw> users(rules);
+      KeyDeclaration key = optional_number_key(std::move(d), access);
+      key.write = [=](const LoadCase& lc) -> std::optional<std::string> {
+        const auto& value = access(lc);
+        if (!value || std::find(users.begin(), users.end(), lc.material.rate) == users.end()) return std::nullopt;
+        return toml_number(*value);
+      };
+      key.default_words = needed_by;
+      return key;
+    };
+    k.push_back(rule_number({"material", "reference_strain_rate", "number", "> 0", "1/s",
+                             "perzyna: the strain rate rate0 of eps_p' = rate0 <sigma_e / sigma_y - 1>^m (rate0 -> "
+                             "infinity is rate-independent j2)"},
+                            [](auto& c) -> auto& { return c.material.reference_strain_rate; }, {RateLaw::perzyna},
+                            "none: perzyna needs it"));
+    k.push_back(rule_number({"material", "creep_coefficient", "number", "> 0", "1/s",
+                             "norton: A of eps_p' = A (sigma_e / reference_stress)^m, the creep rate at the "
+                             "reference stress"},
+                            [](auto& c) -> auto& { return c.material.creep_coefficient; }, {RateLaw::norton},
+                            "none: norton needs it"));
+    {
+      const auto reference = [](auto& c) -> auto& { return c.material.reference_stress; };
+      k.push_back(plausible(rule_number({"material", "reference_stress", "number", "> 0", "Pa",
+                                         "norton: sigma_ref of eps_p' = A (sigma_e / sigma_ref)^m"},
+                                        reference, {RateLaw::norton}, "none: norton needs it"),
+                            1e3, 3e10, "the stresses of solids", reference));
+    }
+    k.push_back(rule_number({"material", "rate_exponent", "number", "[1, 100]", "",
+                             "perzyna, norton: the exponent m of the flow rule (1: linear viscosity; metals creep "
+                             "with m = 3 to 8; 1/m is the strain-rate sensitivity)"},
+                            [](auto& c) -> auto& { return c.material.rate_exponent; },
+                            {RateLaw::perzyna, RateLaw::norton}, "none: perzyna and norton need it"));
     {
       KeyDeclaration control = choice_key({"load", "control", "choice", "", "",
                                            "what load.path steps: depth (the force is the result) or force (the "

@@ -39,6 +39,8 @@ inline constexpr Choice<TableExtension> table_extension_names[] = {{"flat", Tabl
                                                                    {"last_slope", TableExtension::last_slope}};
 inline constexpr Choice<ElasticStressMeasure> elastic_stress_names[] = {{"cauchy", ElasticStressMeasure::cauchy},
                                                                        {"kirchhoff", ElasticStressMeasure::kirchhoff}};
+inline constexpr Choice<RateLaw> rate_law_names[] = {
+    {"none", RateLaw::none}, {"perzyna", RateLaw::perzyna}, {"norton", RateLaw::norton}};
 inline constexpr Choice<LoadControlKind> load_control_names[] = {{"depth", LoadControlKind::depth},
                                                                  {"force", LoadControlKind::force}};
 inline constexpr Choice<ElementChoice> element_names[] = {

@@ -66,6 +66,7 @@ std::string to_string(MaterialModel model) { return name_of(model_names, model);
 std::string to_string(HardeningLaw law) { return name_of(hardening_names, law); }
 std::string to_string(TableExtension extension) { return name_of(table_extension_names, extension); }
 std::string to_string(ElasticStressMeasure measure) { return name_of(elastic_stress_names, measure); }
+std::string to_string(RateLaw law) { return name_of(rate_law_names, law); }
 std::string to_string(SceneKind kind) { return name_of(scene_names, kind); }
 std::string to_string(StrainChoice strain) { return name_of(strain_names, strain); }
 std::string to_string(LoadControlKind control) { return name_of(load_control_names, control); }
@@ -230,6 +231,36 @@ static void check_hardening_keys(const Reader& r, LoadCase& lc) {
   }
 }
 
+/// The flow rules' own keys belong to their rule (docs/MODEL.md §13.3): one given under another
+/// rule is refused, and Norton's creep, which has no yield surface, refuses the hardening curve's
+/// keys (they would set nothing).
+static void check_rate_keys(const Reader& r, const LoadCase& lc) {
+  struct RuleKey {
+    const char* key;
+    std::vector<RateLaw> rules;
+  };
+  const std::vector<RuleKey> table{{"reference_strain_rate", {RateLaw::perzyna}},
+                                   {"creep_coefficient", {RateLaw::norton}},
+                                   {"reference_stress", {RateLaw::norton}},
+                                   {"rate_exponent", {RateLaw::perzyna, RateLaw::norton}}};
+  const RateLaw rule = lc.material.rate;
+  for (const auto& entry : table) {
+    if (std::find(entry.rules.begin(), entry.rules.end(), rule) != entry.rules.end() || !r.find("material", entry.key))
+      continue;
+    std::string owners;
+    for (const RateLaw owner : entry.rules) owners += (owners.empty() ? "\"" : " and \"") + to_string(owner) + "\"";
+    r.fail(std::string("material.") + entry.key,
+           fmt::format("does not apply to material.rate = \"{}\" (it belongs to {})", to_string(rule), owners));
+  }
+  if (rule == RateLaw::norton)
+    for (const char* key : {"e0", "yield_stress", "hardening", "kappa", "n", "K", "prestrain", "Q", "b",
+                            "hardening_table", "hardening_points", "table_extension"})
+      if (r.find("material", key))
+        r.fail(std::string("material.") + key,
+               "does not apply to material.rate = \"norton\": power-law creep flows at any stress, with no yield "
+               "surface and no hardening curve (for creep beside a yield surface use \"perzyna\")");
+}
+
 LoadCase from_table(const toml::table& root, const std::string& source, const std::filesystem::path& base_dir) {
   Reader r(root, source, base_dir);
   const auto& keys = key_declarations();
@@ -265,6 +296,7 @@ LoadCase from_table(const toml::table& root, const std::string& source, const st
   }
   check_punch_keys(r, lc);
   check_hardening_keys(r, lc);
+  check_rate_keys(r, lc);
   // A cone has no length scale: its contact edge sweeps the whole contact zone node by node, and
   // under a plastic material the edge carries the full hardness, so the node-by-node engagement is
   // a first-order error.  30 elements hold Kick's law P/h^2 = const to 0.34% (docs/verification.md, "Kick's law on a cone").

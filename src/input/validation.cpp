@@ -157,6 +157,35 @@ static void validate_hardening(const LoadCase& lc) {
 namespace input_detail {
 
 /// The indenter on its own: what its shape needs, whatever specimen it meets.
+/// A rate-dependent flow rule (docs/MODEL.md §13.3): J2's, with its parameters, on a load path in
+/// time (the increments' durations are what it integrates over).
+static void validate_rate(const LoadCase& lc) {
+  const auto& m = lc.material;
+  if (m.rate == RateLaw::none) return;
+  const auto fail = [&](const std::string& key, const std::string& problem) { throw InputError(lc.source, key, problem); };
+  const std::string rule = to_string(m.rate);
+  if (m.model != MaterialModel::j2)
+    fail("material.rate", fmt::format("\"{}\" is a flow rule of J2 flow theory: set material.model = \"j2\"", rule));
+  const auto require = [&](const std::optional<double>& value, const char* key) {
+    if (!value) fail(key, fmt::format("missing key (material.rate = \"{}\" needs it)", rule));
+  };
+  if (m.rate == RateLaw::perzyna) require(m.reference_strain_rate, "material.reference_strain_rate");
+  if (m.rate == RateLaw::norton) {
+    require(m.creep_coefficient, "material.creep_coefficient");
+    require(m.reference_stress, "material.reference_stress");
+  }
+  require(m.rate_exponent, "material.rate_exponent");
+  if (lc.load.times.empty())
+    fail("material.rate", fmt::format("\"{}\" flows at a rate: give load.times, the time [s] of each waypoint of "
+                                      "load.path (e.g. path = [0, 0.05, 0.05, 0], times = [0, 10, 20, 30] for a "
+                                      "10 s loading, a 10 s hold and a 10 s unloading)",
+                                      rule));
+  // Creep flows wherever the stress is not zero: there is no elastic far field to condense.
+  if (m.rate == RateLaw::norton && lc.solver.far_field == FarFieldChoice::condense)
+    fail("solver.far_field", "\"condense\" takes the far field to be linear elastic, and under material.rate = "
+                             "\"norton\" every stressed element creeps: use \"auto\" or \"full\"");
+}
+
 void validate_punch_shape(const LoadCase& lc) {
   const auto& punch = lc.punch;
   if ((punch.shape == PunchShapeKind::sphere || punch.shape == PunchShapeKind::flat) && !(punch.radius > 0.0))
@@ -248,6 +277,7 @@ void validate(const LoadCase& lc) {
                                       lc.contact.friction));
 
   validate_hardening(lc);
+  validate_rate(lc);
 
   const auto& path = lc.load.path;
   if (path.size() < 2) fail("load.path", "needs at least two waypoints, starting at 0");
@@ -314,7 +344,8 @@ void validate(const LoadCase& lc) {
                      "than the specimen is no indentation",
                      *lc.mesh.contact_half_width, lc.geometry.lx, lc.geometry.ly));
   if (!lc.mesh.plastic_zone.empty()) {
-    if (!lc.mesh.contact_half_width)
+    // (A flat punch's contact half-width is its radius: case.toml records the zone alone.)
+    if (!lc.mesh.contact_half_width && punch.shape != PunchShapeKind::flat)
       fail("mesh.plastic_zone", "is the pilot's and comes with its contact half-width: give mesh.contact_half_width too");
     for (std::size_t i = 0; i < lc.mesh.plastic_zone.size(); ++i) {
       const auto& z = lc.mesh.plastic_zone[i];

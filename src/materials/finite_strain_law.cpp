@@ -55,7 +55,7 @@ FiniteStrainResponse J2LogStrainPointLaw::respond(const Deformation& F, const J2
   // 2 mu dev(e_e^tr), its pressure K tr(e_e^tr) = K ln J (plastic flow keeps the volume).
   J2State small;
   small.equivalent_plastic_strain = old.equivalent_plastic_strain;
-  const J2Response j = law_.respond(trial.strain, small);
+  const J2Response j = law_.respond(trial.strain, small, time_step_);
   FiniteStrainResponse r;
   r.kirchhoff = j.stress;
   r.plastic = j.plastic;
@@ -84,7 +84,7 @@ NominalTangent J2LogStrainPointLaw::unloading_tangent(std::size_t point, const D
   const LogarithmicStrain trial = logarithmic_strain(F, state_[point].inverse_plastic_metric);
   J2State small;
   small.equivalent_plastic_strain = state_[point].equivalent_plastic_strain;
-  VoigtVector tau = law_.respond(trial.strain, small).stress;
+  VoigtVector tau = law_.respond(trial.strain, small).stress;  // instantaneous: no flow
   ConstitutiveMatrix d = law_.elastic_stiffness();
   express_in_kirchhoff_stress(measure_, trial.strain, tau, d);
   return nominal_response(F.F(), tau, d, trial.derivative).tangent;

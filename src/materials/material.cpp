@@ -119,12 +119,15 @@ std::optional<std::string> IlyushinLaw::admissibility_violation() const {
 J2Law::J2Law(const IlyushinLaw& curve) : J2Law(curve.elastic(), std::make_shared<IlyushinHardening>(curve)) {}
 
 J2Law::J2Law(const ElasticMaterial& elastic, std::shared_ptr<const HardeningCurve> hardening)
-    : hardening_(std::move(hardening)),
+    : J2Law(elastic, std::make_shared<RateIndependentFlow>(std::move(hardening))) {}
+
+J2Law::J2Law(const ElasticMaterial& elastic, std::shared_ptr<const FlowRule> flow)
+    : flow_(std::move(flow)),
       bulk_(elastic.lame().lambda + 2.0 * elastic.lame().mu / 3.0),
       mu_(elastic.lame().mu),
-      initial_yield_(hardening_->initial_yield()) {}
+      initial_yield_(flow_->initial_yield()) {}
 
-J2Response J2Law::respond(const VoigtVector& strain, const J2State& old) const {
+J2Response J2Law::respond(const VoigtVector& strain, const J2State& old, double time_step) const {
   J2Response r;
   r.state = old;
   const double trace = strain[0] + strain[1] + strain[3];
@@ -138,7 +141,7 @@ J2Response J2Law::respond(const VoigtVector& strain, const J2State& old) const {
   const double trial_norm = tensor_norm(trial);
   const double trial_equivalent = std::sqrt(1.5) * trial_norm;
   const std::optional<PlasticCorrection> correction =
-      hardening_->correct(trial_equivalent, old.equivalent_plastic_strain, mu_);
+      flow_->correct(trial_equivalent, old.equivalent_plastic_strain, mu_, time_step);
 
   Eigen::Vector4d deviator = trial;
   double theta = 1.0, theta_bar = 0.0;

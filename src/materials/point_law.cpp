@@ -115,7 +115,7 @@ bool J2PointLaw::elastic(std::size_t point, const VoigtVector& strain) const {
 }
 
 PointResponse J2PointLaw::respond(std::size_t point, const VoigtVector& strain) const {
-  const J2Response j = law_.respond(strain, state_[point]);
+  const J2Response j = law_.respond(strain, state_[point], time_step_);
   PointResponse r;
   r.stress = j.stress;
   r.tangent = j.tangent;
@@ -129,7 +129,7 @@ PointResponse J2PointLaw::respond(std::size_t point, const VoigtVector& strain) 
 }
 
 void J2PointLaw::commit(std::size_t point, const VoigtVector& strain) {
-  state_[point] = law_.respond(strain, state_[point]).state;
+  state_[point] = law_.respond(strain, state_[point], time_step_).state;
 }
 
 std::vector<double> J2PointLaw::history() const {
@@ -169,7 +169,7 @@ std::optional<std::string> J2PointLaw::history_violation(std::size_t point, cons
     return fmt::format("a plastic strain of norm {:g} is longer than the path its equivalent plastic strain {:g} "
                        "allows (|eps_p| <= sqrt(3/2) eps_p_bar)",
                        norm, path);
-  const J2Response again = law_.respond(strain, s);
+  const J2Response again = law_.respond(strain, s);  // the instantaneous (rate-independent) return
   if (again.state.equivalent_plastic_strain - path > accumulated_rounding * std::max(path, initial_yield_ / (3.0 * law_.shear_modulus())))
     return fmt::format("the committed strain lies outside the yield surface of its history (a converged state "
                        "would have returned {:g} more equivalent plastic strain)",

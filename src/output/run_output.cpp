@@ -27,6 +27,19 @@ double significant(double x, int digits) {
 double seconds(double t) { return std::round(t * 1e6) / 1e6; }
 double ratio(double r) { return std::round(r * 1e4) / 1e4; }
 
+// A rate-dependent flow rule's parameters (docs/MODEL.md §13.3), beside the hardening curve's
+// (which Norton's creep does not use).
+void add_flow_rule(const MaterialInput& m, nlohmann::ordered_json& law) {
+  if (m.rate == RateLaw::none) return;
+  law["rate"] = to_string(m.rate);
+  if (m.rate == RateLaw::perzyna) law["reference_strain_rate"] = m.reference_strain_rate.value_or(0.0);
+  if (m.rate == RateLaw::norton) {
+    law["creep_coefficient"] = m.creep_coefficient.value_or(0.0);
+    law["reference_stress"] = m.reference_stress.value_or(0.0);
+  }
+  law["rate_exponent"] = m.rate_exponent.value_or(0.0);
+}
+
 /// What summary.json says of the run besides its results: who wrote it, the units, the material.
 nlohmann::ordered_json run_fields(const LoadCase& lc) {
   const auto& m = lc.material;
@@ -39,6 +52,11 @@ nlohmann::ordered_json run_fields(const LoadCase& lc) {
                 {"stiffness", axisymmetric ? "N/m" : "N/m per m"},
                 {"stress", "Pa"}};
   j["model"] = to_string(m.model);
+  if (m.rate == RateLaw::norton) {  // no yield surface, no hardening curve
+    j["material"] = {{"E", m.E}, {"nu", m.nu}};
+    add_flow_rule(m, j["material"]);
+    return j;
+  }
   if (!m.flow_stress_law()) {
     j["material"] = {{"E", m.E},
                      {"nu", m.nu},
@@ -47,6 +65,7 @@ nlohmann::ordered_json run_fields(const LoadCase& lc) {
                      {"hardening", to_string(m.hardening)},
                      {"kappa", m.kappa},
                      {"n", m.n}};
+    add_flow_rule(m, j["material"]);
     return j;
   }
   // A tensile test's flow curve: its initial yield stress and the law's own parameters.
@@ -69,6 +88,7 @@ nlohmann::ordered_json run_fields(const LoadCase& lc) {
     case HardeningLaw::linear:
     case HardeningLaw::power: break;
   }
+  add_flow_rule(m, law);
   return j;
 }
 
@@ -138,6 +158,7 @@ LoadHistorySummary::LoadHistorySummary(const LoadCase* load_case) {
   context_.shape = load_case->punch.shape;
   context_.settings = load_case->analysis;
   context_.specimen_nu = load_case->material.nu;
+  if (load_case->load.control == LoadControlKind::force) targets_ = plan_increments(load_case->load);
 }
 
 void LoadHistorySummary::set_true_contact(int step, const TrueContact& truth) {
@@ -152,6 +173,7 @@ void LoadHistorySummary::set_true_contact(int step, const TrueContact& truth) {
 void LoadHistorySummary::add(const IncrementRecord& r, double free_surface_depth) {
   depths_.push_back(r.alpha);
   forces_.push_back(r.force);
+  controlled_.push_back(run_branch_coordinate(targets_, r));
   steps_.push_back(r.step);
   contact_nodes_.push_back(r.contact_nodes);
   free_surface_depths_.push_back(free_surface_depth);
@@ -161,7 +183,7 @@ void LoadHistorySummary::add(const IncrementRecord& r, double free_surface_depth
 
 std::vector<LoadHistorySummary::Unloading> LoadHistorySummary::unloadings() const {
   std::vector<Unloading> unloadings;
-  for (const CurveBranch& b : unloading_branches(depths_)) {
+  for (const CurveBranch& b : unloading_branches(controlled_)) {
     const std::size_t k = b.peak;
     if (!(forces_[k] > 0.0)) continue;  // the punch had left before the reversal: nothing unloads
     // The first unloading increment's secant is S; the last loading increment's secant is the
@@ -201,7 +223,7 @@ std::string LoadHistorySummary::json(const nlohmann::ordered_json& run_fields, R
   j["peak_depth"] = peak_depth_;
   j["peak_force"] = peak_force_;
   nlohmann::ordered_json unloading = nlohmann::ordered_json::array();
-  const std::vector<CurveBranch> branches = unloading_branches(depths_);
+  const std::vector<CurveBranch> branches = unloading_branches(controlled_);
   for (const Unloading& u : unloadings()) {
     nlohmann::ordered_json b = {{"step", u.step},
                                 {"depth", u.depth},

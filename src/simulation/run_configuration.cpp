@@ -49,6 +49,13 @@ LoadCase coarse_pilot_case(const LoadCase& lc, double depth) {
   pilot.load.increments = 4;
   pilot.load.segment_increments.clear();
   pilot.load.times.clear();
+  // A rate-dependent law flows over time (docs/MODEL.md §13.3): the pilot presses in the time the
+  // case takes to its largest waypoint.
+  if (lc.material.rate != RateLaw::none && !lc.load.times.empty()) {
+    const auto& path = lc.load.path;
+    const auto peak = static_cast<std::size_t>(std::max_element(path.begin(), path.end()) - path.begin());
+    pilot.load.times = {0.0, lc.load.times[peak]};
+  }
   pilot.mesh = MeshInput{};
   pilot.mesh.contact_nodes = 8;
   pilot.mesh.error_estimate = ErrorEstimateChoice::off;
@@ -180,7 +187,8 @@ LinearSolverKind choose_linear_solver(LinearSolverChoice choice, int unknowns) {
 NearField choose_near_field(const LoadCase& lc, const Mesh& mesh, const MeshPlan& plan, bool plastic,
                             const std::optional<PlasticExtent>& plastic_zone) {
   NearField near;
-  if (lc.solver.far_field == FarFieldChoice::full) return near;
+  // Norton's creep has no yield surface: every stressed element flows, and no far field is elastic.
+  if (lc.solver.far_field == FarFieldChoice::full || lc.material.rate == RateLaw::norton) return near;
   const double a = plan.contact_half_width_estimate, h = plan.fine_spacing;
   const double contact_width = 1.3 * a + 2.0 * h;
   while (near.contact_nodes < mesh.nodes_x() && mesh.x(near.contact_nodes) <= contact_width) ++near.contact_nodes;
@@ -219,7 +227,9 @@ ElementKind choose_element(const LoadCase& lc) {
   const bool near_perfect_plasticity =
       plastic && (m.flow_stress_law() || (m.hardening == HardeningLaw::linear ? m.kappa > 0.95 : m.n < 0.1));
   const bool sharp_plastic_indentation = plastic && sharp_tip(lc.punch.shape);
-  return near_incompressible || near_perfect_plasticity || sharp_plastic_indentation ? ElementKind::bbar
+  // Norton's creep flows isochorically everywhere, and in a hold it is all the specimen does.
+  const bool creeping = m.rate == RateLaw::norton;
+  return near_incompressible || near_perfect_plasticity || sharp_plastic_indentation || creeping ? ElementKind::bbar
                                                                                        : ElementKind::q1;
 }
 
@@ -244,10 +254,11 @@ std::vector<std::string> plausibility_warnings(const LoadCase& lc, const MeshPla
   // The model is small-strain with the gap measured vertically (docs/MODEL.md §3): both need slopes
   // and depths small against the punch's size.
   if (auto slope = make_punch(lc.punch)->slope_warning(lc.max_depth())) warnings.push_back(*slope);
-  // Time reaches no law yet (docs/MODEL.md §13.2): every material model is rate-independent.
-  if (!lc.load.times.empty())
-    warnings.push_back("load.times only labels the increments: no material model of this case depends on the rate "
-                       "of loading, so the loading rate changes nothing and a hold repeats its state (no creep)");
+  // Time reaches only a rate-dependent flow rule (docs/MODEL.md §13.3).
+  if (!lc.load.times.empty() && lc.material.rate == RateLaw::none)
+    warnings.push_back("load.times only labels the increments: the material of this case does not depend on the rate "
+                       "of loading (material.rate = \"none\"), so the loading rate changes nothing and a hold repeats "
+                       "its state (no creep)");
   // A contact that is not small against the specimen: its edges and base shape P well beyond the
   // discretization error (docs/user-guide.md, "Choosing the specimen").
   const double a = plan.contact_half_width_estimate;

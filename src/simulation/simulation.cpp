@@ -93,7 +93,7 @@ void Simulation::build(const RunConfiguration& configuration, const std::optiona
     std::unique_ptr<FiniteStrainPointLaw> finite_law;
     if (m.model == MaterialModel::j2)
       finite_law =
-          std::make_unique<J2LogStrainPointLaw>(J2Law(material, make_hardening_curve(m)), points, m.elastic_stress);
+          std::make_unique<J2LogStrainPointLaw>(J2Law(material, make_flow_rule(m)), points, m.elastic_stress);
     else if (m.model == MaterialModel::ilyushin)
       finite_law = std::make_unique<HenckyPointLaw>(
           material, std::make_unique<IlyushinPointLaw>(*law, unloads(load_case_.load.path), points), m.elastic_stress);
@@ -104,7 +104,7 @@ void Simulation::build(const RunConfiguration& configuration, const std::optiona
   } else if (m.model != MaterialModel::elastic) {
     std::unique_ptr<PointLaw> point_law;
     if (m.model == MaterialModel::j2)
-      point_law = std::make_unique<J2PointLaw>(J2Law(material, make_hardening_curve(m)), points);
+      point_law = std::make_unique<J2PointLaw>(J2Law(material, make_flow_rule(m)), points);
     else point_law = std::make_unique<IlyushinPointLaw>(*law, unloads(load_case_.load.path), points);
     plastic_ = std::make_unique<InelasticBulk>(*stiffness_, std::move(point_law));
     bulk_ = plastic_.get();
@@ -148,8 +148,12 @@ Simulation::~Simulation() = default;
 
 void Simulation::run(const std::function<void(const IncrementRecord&)>& on_increment) {
   const std::vector<double> targets = plan_increments(load_case_.load);
+  // Each increment's duration (docs/MODEL.md §13.2), 0 on a path without time.
+  const std::vector<double> times = plan_times(load_case_.load);
   while (state_.next_target < targets.size()) {
-    const IncrementRecord r = advance_to(targets[state_.next_target]);
+    const std::size_t k = state_.next_target;
+    const double duration = k > 0 && k < times.size() ? times[k] - times[k - 1] : 0.0;
+    const IncrementRecord r = advance_to(targets[k], duration);
     ++state_.next_target;  // before reporting: a checkpoint taken now continues with the next depth
     if (on_increment) on_increment(r);
   }
@@ -158,13 +162,17 @@ void Simulation::run(const std::function<void(const IncrementRecord&)>& on_incre
 // One increment, as a script: a trial depth, the Newton solve with its globalisation ladder,
 // then either the commit of a converged trial (after checking the condensation's assumptions),
 // or a cutback.
-IncrementRecord Simulation::advance_to(double target) {
+IncrementRecord Simulation::advance_to(double target, double duration) {
   const PhaseTimes::Scope timing = times_.measure("stepping");
   const auto start = std::chrono::steady_clock::now();
   anticipate_plastic_zone(expected_depth(target));
   SolveCounters counters;
   int cutbacks = 0;
-  double step = target - control_->committed(state_);
+  // The sub-steps are fractions of the increment, in the controlled quantity and in time alike
+  // (a hold moves only in time): `done` converged so far, `share` the next one's.  Both are sums
+  // and halvings of 1, exact in binary.
+  const double from = control_->committed(state_), span = target - from;
+  double done = 0.0, share = 1.0;
   // The state of the last reported increment, saved before a converged sub-step (after a
   // cutback) moves the simulation past it: an interruption returns to it.
   std::optional<SimulationState> reported;
@@ -184,10 +192,10 @@ IncrementRecord Simulation::advance_to(double target) {
   };
   for (;;) {
     stop_if_requested();
-    double trial = control_->committed(state_) + step;
-    if (std::abs(target - trial) <= 1e-12 * std::abs(target)) trial = target;
-    if (solve_at(trial, counters, stop_if_requested)) {
-      if (trial != target && !reported) reported = state();
+    const double reach = std::min(1.0, done + share);
+    const double trial = reach == 1.0 ? target : from + reach * span;
+    if (solve_at(trial, (reach - done) * duration, counters, stop_if_requested)) {
+      if (reach != 1.0 && !reported) reported = state();
       from_system(system_guess_, guess_);
       const double depth = solved_depth(trial);
       if (grow_near_field(guess_, depth)) {
@@ -196,11 +204,10 @@ IncrementRecord Simulation::advance_to(double target) {
         continue;  // the same trial on the larger near field
       }
       commit(trial, depth);
-      if (trial == target) break;
+      done = reach;
+      if (reach == 1.0) break;
       // Grow the sub-step back after an easy one.
-      if (last_report_.iterations <= 3) step *= 2.0;
-      const double rest = target - control_->committed(state_);
-      step = std::copysign(std::min(std::abs(step), std::abs(rest)), rest);
+      if (last_report_.iterations <= 3) share *= 2.0;
       continue;
     }
     if (cutbacks >= load_case_.solver.max_cutbacks) {
@@ -215,7 +222,7 @@ IncrementRecord Simulation::advance_to(double target) {
           control_->describe(trial), report.iterations, report.residual, report.kinsol_flag,
           report.message.empty() ? "" : ": ", report.message, cause ? ": " : "", cause ? *cause : "", limit));
     }
-    step *= 0.5;
+    share *= 0.5;
     ++cutbacks;
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -236,10 +243,14 @@ IncrementRecord Simulation::advance_to(double target) {
 // on from the best iterate of an attempt that cycled or diverged was tried too: on the cones'
 // unloading it took as many iterations in all, on some increments more.)  The solution is left
 // in system_guess_.
-bool Simulation::solve_at(double trial, SolveCounters& counters, const std::function<void()>& stop_if_requested) {
+bool Simulation::solve_at(double trial, double time_step, SolveCounters& counters,
+                          const std::function<void()>& stop_if_requested) {
   // Laws that follow the global load history (Ilyushin's unloading rule) need to know whether
-  // this trial goes beyond the deepest point so far.
-  if (plastic_) plastic_->set_loading(control_->loads(state_, trial));
+  // this trial goes beyond the deepest point so far; rate-dependent laws, how long it takes.
+  if (plastic_) {
+    plastic_->set_loading(control_->loads(state_, trial));
+    plastic_->set_time_step(time_step);
+  }
   // Friction's slip is measured from the committed state this (sub-)increment starts from.
   hold_committed_contact_state(state_.u);
   if (controlled_ && trial <= 0.0) return solve_released(counters);
@@ -274,6 +285,10 @@ void Simulation::commit(double trial, double depth) {
   state_.deepest = std::max(state_.deepest, state_.alpha);
   largest_condition_ = std::max(largest_condition_, last_report_.condition_estimate);
   bulk_->commit(state_.u.data());
+  // The committed state ends the step: what is evaluated at it from now on (its forces, the
+  // fields, a checkpoint's equilibrium check) is its instantaneous response, which a rate-
+  // dependent law flows nothing in.
+  if (plastic_) plastic_->set_time_step(0.0);
   if (plastic_ && condensation_) plastic_->measure_far_field(condensation_->elements());
 }
 

@@ -62,6 +62,10 @@ enum class TableExtension { flat, last_slope };
 /// The stress that the elastic law's D : e sets in finite strain (docs/MODEL.md §12.2): the
 /// Cauchy stress (Abaqus's) or the Kirchhoff stress (Hencky's hyperelastic law).
 enum class ElasticStressMeasure { cauchy, kirchhoff };
+/// J2's flow rule (docs/MODEL.md §13.3): rate-independent (the plastic multiplier keeps the stress
+/// on the yield surface), Perzyna's overstress eps_p' = rate0 <sigma_e / sigma_y(eps_p) - 1>^m, or
+/// Norton's power-law creep eps_p' = A (sigma_e / sigma_ref)^m without a yield surface.
+enum class RateLaw { none, perzyna, norton };
 
 struct MaterialInput {
   MaterialModel model = MaterialModel::elastic;
@@ -82,6 +86,12 @@ struct MaterialInput {
   std::vector<std::pair<double, double>> hardening_points;  ///< table: points (eps_p, sigma [Pa])
   TableExtension table_extension = TableExtension::flat;
   ElasticStressMeasure elastic_stress = ElasticStressMeasure::cauchy;  ///< finite strain only
+  RateLaw rate = RateLaw::none;  ///< j2 only
+  // The flow rules' own parameters, given only with their rule (which requires them).
+  std::optional<double> reference_strain_rate;  ///< perzyna: rate0 [1/s]
+  std::optional<double> creep_coefficient;      ///< norton: A [1/s]
+  std::optional<double> reference_stress;       ///< norton: sigma_ref [Pa]
+  std::optional<double> rate_exponent;          ///< perzyna, norton: m >= 1
 
   /// The law is a flow-stress curve of J2 flow theory only (not an Ilyushin omega).
   bool flow_stress_law() const { return hardening != HardeningLaw::linear && hardening != HardeningLaw::power; }
@@ -311,5 +321,6 @@ std::string to_string(PunchShapeKind shape);
 std::string to_string(HardeningLaw law);
 std::string to_string(TableExtension extension);
 std::string to_string(ElasticStressMeasure measure);
+std::string to_string(RateLaw law);
 
 }  // namespace indentsim

@@ -43,6 +43,8 @@ public:
   virtual bool has_yielded(std::size_t point) const = 0;
   /// As PointLaw::set_loading: the branch of a law that follows the global load history.
   virtual void set_loading(bool /*beyond_previous_peak*/) {}
+  /// As PointLaw::set_time_step: the duration a rate-dependent law flows over.
+  virtual void set_time_step(double /*seconds*/) {}
   /// The carried state of every point, flattened, and its restoration (checkpoints).
   virtual std::vector<double> history() const = 0;
   virtual void restore(const std::vector<double>& history) = 0;
@@ -64,6 +66,9 @@ public:
   bool has_yielded(std::size_t point) const override { return law_ && law_->has_yielded(point); }
   void set_loading(bool beyond_previous_peak) override {
     if (law_) law_->set_loading(beyond_previous_peak);
+  }
+  void set_time_step(double seconds) override {
+    if (law_) law_->set_time_step(seconds);
   }
   std::vector<double> history() const override { return law_ ? law_->history() : std::vector<double>{}; }
   void restore(const std::vector<double>& history) override;
@@ -92,6 +97,7 @@ public:
   NominalTangent unloading_tangent(std::size_t point, const Deformation& F) const override;
   void commit(std::size_t point, const Deformation& F) override;
   bool has_yielded(std::size_t point) const override { return state_[point].equivalent_plastic_strain > 0.0; }
+  void set_time_step(double seconds) override { time_step_ = seconds; }
   std::vector<double> history() const override;
   void restore(const std::vector<double>& history) override;
   bool symmetric_tangent() const override { return measure_ == ElasticStressMeasure::kirchhoff; }
@@ -103,6 +109,7 @@ private:
   J2Law law_;
   std::vector<J2FiniteState, Eigen::aligned_allocator<J2FiniteState>> state_;
   ElasticStressMeasure measure_;
+  double time_step_ = 0.0;
 };
 
 }  // namespace indentsim

@@ -19,6 +19,7 @@
 #include <Eigen/Core>
 
 #include "indentsim/input/load_case.hpp"
+#include "indentsim/materials/flow_rule.hpp"
 #include "indentsim/materials/hardening.hpp"
 #include "indentsim/materials/material_parameter.hpp"
 
@@ -116,24 +117,30 @@ struct J2Response {
 
 /// Incremental J2 flow theory with isotropic hardening (any kinematics: eps33 is given): radial
 /// return (Simo and Hughes, Computational Inelasticity, section 3.3) with its consistent tangent,
-/// on a hardening curve sigma_y(eps_p) (materials/hardening.hpp).  With the curve of an Ilyushin
-/// law, on proportional loading the equivalent plastic strain is eps_p = e_u omega(e_u) and the
-/// yield stress sigma_y = sigma_u(e_u) = 3 mu (1 - omega) e_u, so both models give the same stress.
+/// the scalar return made by a flow rule (materials/flow_rule.hpp): rate-independent on a
+/// hardening curve sigma_y(eps_p) (materials/hardening.hpp), or rate-dependent over the step's
+/// duration.  With the curve of an Ilyushin law, on proportional loading the equivalent plastic
+/// strain is eps_p = e_u omega(e_u) and the yield stress sigma_y = sigma_u(e_u) = 3 mu (1 - omega)
+/// e_u, so both models give the same stress.
 class J2Law {
 public:
-  /// The hardening curve of an Ilyushin law.
+  /// The rate-independent return on the hardening curve of an Ilyushin law.
   explicit J2Law(const IlyushinLaw& curve);
+  /// The rate-independent return on a hardening curve.
   J2Law(const ElasticMaterial& elastic, std::shared_ptr<const HardeningCurve> hardening);
-  /// Stress at total strain `strain` from the committed history `old`.
-  J2Response respond(const VoigtVector& strain, const J2State& old) const;
-  const HardeningCurve& hardening() const { return *hardening_; }
+  J2Law(const ElasticMaterial& elastic, std::shared_ptr<const FlowRule> flow);
+  /// Stress at total strain `strain` from the committed history `old`, reached over a step of
+  /// `time_step` seconds (which only a rate-dependent rule reads; 0 makes its step elastic: the
+  /// instantaneous response).
+  J2Response respond(const VoigtVector& strain, const J2State& old, double time_step = 0.0) const;
+  const FlowRule& flow() const { return *flow_; }
   double shear_modulus() const { return mu_; }
   /// The elastic moduli D (the tangent of an elastic step).
   ConstitutiveMatrix elastic_stiffness() const { return isotropic_stiffness({bulk_ - 2.0 * mu_ / 3.0, mu_}); }
   double initial_yield() const { return initial_yield_; }
 
 private:
-  std::shared_ptr<const HardeningCurve> hardening_;
+  std::shared_ptr<const FlowRule> flow_;
   double bulk_ = 0.0, mu_ = 0.0, initial_yield_ = 0.0;
 };
 

@@ -53,6 +53,9 @@ public:
   /// Whether the load path is beyond its deepest point so far (for laws whose branch follows
   /// the global load history); incremental laws ignore it.
   virtual void set_loading(bool /*beyond_previous_peak*/) {}
+  /// The duration [s] of the (sub-)increment the next responses and commits close (docs/MODEL.md
+  /// §13.2): what a rate-dependent law integrates its flow over; rate-independent laws ignore it.
+  virtual void set_time_step(double /*seconds*/) {}
   /// The carried state of every point, flattened, and its restoration (checkpoints).
   virtual std::vector<double> history() const = 0;
   virtual void restore(const std::vector<double>& history) = 0;
@@ -105,8 +108,9 @@ private:
   std::map<MaterialParameter, PointStrains> peak_strain_derivative_;  // d eps*/d theta, as recorded
 };
 
-/// J2 flow theory with the hardening curve of an Ilyushin law; plastic strain and equivalent
-/// plastic strain are the carried state.
+/// J2 flow theory with any flow rule (materials/flow_rule.hpp); plastic strain and equivalent
+/// plastic strain are the carried state.  A rate-dependent rule flows over the time step set last
+/// (set_time_step).
 class J2PointLaw : public PointLaw {
 public:
   J2PointLaw(const J2Law& law, std::size_t points);
@@ -114,17 +118,20 @@ public:
   PointResponse respond(std::size_t point, const VoigtVector& strain) const override;
   void commit(std::size_t point, const VoigtVector& strain) override;
   bool has_yielded(std::size_t point) const override { return state_[point].equivalent_plastic_strain > 0.0; }
+  void set_time_step(double seconds) override { time_step_ = seconds; }
   std::vector<double> history() const override;
   void restore(const std::vector<double>& history) override;
   /// The plastic strain is a deviator no longer than the path it accumulated along,
   /// |eps_p| <= sqrt(3/2) eps_p_bar (every return adds sqrt(3/2) dgamma n, |n| = 1), and the
   /// committed strain's trial stress lies on or inside the yield surface of eps_p_bar (a
-  /// converged state returns no further plastic strain).
+  /// converged state returns no further plastic strain; a rate-dependent rule's state lies
+  /// anywhere, as its instantaneous response flows nothing).
   std::optional<std::string> history_violation(std::size_t point, const VoigtVector& strain) const override;
 
 private:
   J2Law law_;
   double initial_yield_ = 0.0;
+  double time_step_ = 0.0;
   std::vector<J2State, Eigen::aligned_allocator<J2State>> state_;
 };
 

@@ -87,8 +87,8 @@ public:
   std::string json(const nlohmann::ordered_json& run_fields, RunStatus status, const std::string& message,
                    const PhaseTimes& times = PhaseTimes{},
                    const nlohmann::ordered_json& result_fields = nlohmann::ordered_json::object()) const;
-  /// Every unloading branch of the rows fed so far (unloading_branches, load_stepping.hpp) whose
-  /// peak carries a force.
+  /// Every unloading branch of the rows fed so far (unloading_branches, load_stepping.hpp, in the
+  /// controlled quantity) whose peak carries a force.
   std::vector<Unloading> unloadings() const;
   double peak_depth() const { return peak_depth_; }
   double peak_force() const { return peak_force_; }
@@ -99,6 +99,9 @@ private:
   std::shared_ptr<const PunchShape> punch_;  // the indenter's area function (null: no analysis)
   AnalysisContext context_;
   std::vector<double> depths_, forces_;
+  /// The controlled quantity's planned targets (empty: the depths), and each row's: the branches
+  /// are found in it (run_branch_coordinate).
+  std::vector<double> targets_, controlled_;
   std::vector<int> steps_, contact_nodes_;
   std::vector<double> free_surface_depths_;
   std::vector<std::pair<int, TrueContact>> truths_;

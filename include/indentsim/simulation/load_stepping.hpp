@@ -55,6 +55,15 @@ struct IncrementRecord {
   double wall_seconds = 0.0;  ///< wall-clock time spent on this increment
 };
 
+/// The coordinate a run's unloading branches are found in (unloading_branches): the planned
+/// target of the row's step under force control (`targets` = plan_increments; a creeping
+/// specimen's depth still rises as the force falls, the "nose", and a hold's forces equal their
+/// target only to the Newton tolerance), else (`targets` empty) the depth.
+inline double run_branch_coordinate(const std::vector<double>& targets, const IncrementRecord& r) {
+  const auto step = static_cast<std::size_t>(r.step);
+  return step < targets.size() ? targets[step] : r.alpha;
+}
+
 /// Secant predictor: extrapolates the last two converged states linearly in alpha.
 void extrapolate(const std::vector<double>& u_previous, double alpha_previous, const std::vector<double>& u_current,
                  double alpha_current, double alpha_next, std::vector<double>& guess);

@@ -64,8 +64,9 @@ public:
   void run(const std::function<void(const IncrementRecord&)>& on_increment = {});
 
   /// Solves one increment from the current state to `target` of the load control: a depth
-  /// alpha, or a force P (with cutbacks).
-  IncrementRecord advance_to(double target);
+  /// alpha, or a force P (with cutbacks), over `duration` seconds (what a rate-dependent law
+  /// flows over; 0 on a path without time).
+  IncrementRecord advance_to(double target, double duration = 0.0);
   /// What the load path steps (load.control).
   const LoadControl& load_control() const { return *control_; }
 
@@ -160,9 +161,9 @@ private:
   struct SolveCounters {
     long iterations = 0, factorizations = 0;
   };
-  /// The Newton solve at `trial` of the load control with its globalisation ladder; true if it
-  /// converged (the solution in system_guess_).
-  bool solve_at(double trial, SolveCounters& counters, const std::function<void()>& stop_if_requested);
+  /// The Newton solve at `trial` of the load control, reached over `time_step` seconds, with its
+  /// globalisation ladder; true if it converged (the solution in system_guess_).
+  bool solve_at(double trial, double time_step, SolveCounters& counters, const std::function<void()>& stop_if_requested);
   /// Force control's target 0: the specimen off the punch, solved at a depth clear of it and
   /// reported where the punch just touches it (touch_depth).
   bool solve_released(SolveCounters& counters);

@@ -47,6 +47,10 @@ public:
     kept_.clear();
     law_->set_loading(beyond_previous_peak);
   }
+  void set_time_step(double seconds) override {
+    kept_.clear();  // responses kept for another step's duration
+    law_->set_time_step(seconds);
+  }
   bool symmetric_tangent() const override;
   /// Every element in finite strain with the laws' unloading tangents (the state's stress, elastic moduli).
   std::optional<std::vector<double>> unloading_tangent(const double* u) const override;

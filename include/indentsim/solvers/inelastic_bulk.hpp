@@ -38,6 +38,10 @@ public:
     kept_.clear();  // the branch of the law may change
     law_->set_loading(beyond_previous_peak);
   }
+  void set_time_step(double seconds) override {
+    kept_.clear();  // responses kept for another step's duration
+    law_->set_time_step(seconds);
+  }
 
   /// The one element loop of inelastic assembly, for any Newton system (the whole mesh, or a
   /// condensed near field, given by its element slots): adds to f (or to the tangent's values)

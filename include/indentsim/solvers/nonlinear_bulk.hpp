@@ -29,6 +29,8 @@ public:
   virtual bool has_yielded(std::size_t point) const = 0;
   /// Whether the load path is beyond its deepest point so far (PointLaw::set_loading).
   virtual void set_loading(bool beyond_previous_peak) = 0;
+  /// The duration [s] of the (sub-)increment being solved (PointLaw::set_time_step).
+  virtual void set_time_step(double seconds) = 0;
   /// Whether the tangent is symmetric (F-bar's is not: a Cholesky factorization cannot take it).
   virtual bool symmetric_tangent() const { return true; }
   /// Adds d f_int / d theta at fixed u over the slots' elements to df; false (df then unusable)
