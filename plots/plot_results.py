@@ -191,7 +191,7 @@ def plot_curve(case, summary, curve, units, size, outdir, measured=None):
                         label=f"discretization error ± {100 * error[k] / force[k]:.2g}% at the peak")
     for n, u in enumerate(summary.get("unloading", [])):
         h, p, stiffness = u["depth"], u["force"], u["stiffness"]
-        if stiffness > 0:
+        if stiffness is not None and stiffness > 0:
             h0 = h - p / stiffness  # where the secant from the reversal meets P = 0
             ax.plot(units.depth(np.array([h0, h])), units.force(np.array([0, p])), ":", color=ip.BLACK,
                     lw=plt.rcParams["lines.linewidth"] * 0.7, zorder=4,

@@ -8,12 +8,13 @@ namespace indentsim {
 namespace {
 
 /// The root of g, falling on [low, high] with g(low) > 0 >= g(high), by Newton's method from
-/// `high` kept inside the bracket (bisection where a step leaves it or is not finite).  Each
-/// rule's g is concave in its variable, so Newton from the right descends onto the root without
-/// overshooting; the bracket guards against curvature a hardening curve adds.
+/// `start` (one end) kept inside the bracket (bisection where a step leaves it or is not finite).
+/// Each rule's g is concave or convex in its variable, and started from the end from which Newton
+/// descends onto the root without overshooting; the bracket guards against the curvature a
+/// hardening curve adds.
 template <class Residual>
-double falling_root(Residual residual_and_slope, double low, double high, double tolerance) {
-  double x = high;
+double falling_root(Residual residual_and_slope, double low, double high, double start, double tolerance) {
+  double x = start;
   for (int iteration = 0; iteration < 200; ++iteration) {
     const auto [g, slope] = residual_and_slope(x);
     if (std::abs(g) <= tolerance) break;
@@ -41,6 +42,7 @@ std::optional<PlasticCorrection> PerzynaFlow::correct(double trial_equivalent, d
   // m > 1).  At the perfectly plastic return dgamma = excess / 3 mu, g <= 0: the bracket.
   const double c = time_step * rate0_, three_mu = 3.0 * mu;
   const double high = std::pow(excess / three_mu / c, 1.0 / m_);
+  if (!(c > 0.0) || !std::isfinite(high)) return std::nullopt;  // a step too short to flow in double precision
   const auto g = [&](double y) {
     const double ym1 = std::pow(y, m_ - 1.0), dgamma = c * ym1 * y;
     const double sigma_y = hardening_->flow_stress(eps_p_old + dgamma);
@@ -49,7 +51,7 @@ std::optional<PlasticCorrection> PerzynaFlow::correct(double trial_equivalent, d
     return std::pair{trial_equivalent - three_mu * dgamma - sigma_y * (1.0 + y),
                      -(three_mu + H * (1.0 + y)) * d_dgamma - sigma_y};
   };
-  const double y = falling_root(g, 0.0, high, 1e-15 * trial_equivalent);
+  const double y = falling_root(g, 0.0, high, high, 1e-15 * trial_equivalent);
   const double dgamma = c * std::pow(y, m_);
   if (!(dgamma > 0.0)) return std::nullopt;
   // R(dgamma) = sigma_y(eps_p) (1 + y(dgamma)): R' = H (1 + y) + sigma_y y / (m dgamma).
@@ -62,20 +64,23 @@ std::optional<PlasticCorrection> NortonFlow::correct(double trial_equivalent, do
                                                      double time_step) const {
   if (!(trial_equivalent > 0.0) || !(time_step > 0.0)) return std::nullopt;
   // Backward Euler: dgamma = dt A (sigma_e / sigma_ref)^m at the end of the step, sigma_e =
-  // sigma_e^trial - 3 mu dgamma.  In the stress ratio y = sigma_e / sigma_e^trial in (0, 1],
-  //   g(y) = sigma_e^trial (1 - y) / (3 mu) - dt A (y sigma_e^trial / sigma_ref)^m
-  // falls from g(0) > 0 to g(1) < 0, concave for m >= 1.
+  // sigma_e^trial - 3 mu dgamma.  In the share of the trial stress that relaxes, z = 3 mu dgamma /
+  // sigma_e^trial in [0, 1) (so that a small creep step keeps its digits, which 1 - sigma_e /
+  // sigma_e^trial would cancel),
+  //   g(z) = dt A (ratio (1 - z))^m - z sigma_e^trial / (3 mu),   ratio = sigma_e^trial / sigma_ref,
+  // falls from g(0) > 0 to g(1) < 0, convex for m >= 1: Newton from z = 0 rises onto the root.
   const double three_mu = 3.0 * mu, scale = trial_equivalent / three_mu;
   const double c = time_step * A_, ratio = trial_equivalent / sigma_ref_;
-  const auto g = [&](double y) {
-    const double rate_term = c * std::pow(y * ratio, m_);
-    return std::pair{scale * (1.0 - y) - rate_term, -scale - m_ * rate_term / y};
+  if (!(c > 0.0)) return std::nullopt;  // a step too short to flow in double precision
+  const auto g = [&](double z) {
+    const double rest = 1.0 - z, rate_term = c * std::pow(ratio * rest, m_);
+    return std::pair{rate_term - scale * z, -m_ * rate_term / rest - scale};
   };
-  const double y = falling_root(g, 0.0, 1.0, 1e-15 * scale);
-  const double dgamma = scale * (1.0 - y);
+  const double z = falling_root(g, 0.0, 1.0, 0.0, 1e-15 * scale);
+  const double dgamma = scale * z;
   if (!(dgamma > 0.0)) return std::nullopt;
   // R(dgamma) = sigma_ref (dgamma / (dt A))^(1/m) = sigma_e: R' = sigma_e / (m dgamma).
-  return PlasticCorrection{dgamma, y * trial_equivalent / (m_ * dgamma)};
+  return PlasticCorrection{dgamma, (1.0 - z) * trial_equivalent / (m_ * dgamma)};
 }
 
 std::shared_ptr<const FlowRule> make_flow_rule(const MaterialInput& material) {

@@ -169,7 +169,8 @@ std::optional<std::string> J2PointLaw::history_violation(std::size_t point, cons
     return fmt::format("a plastic strain of norm {:g} is longer than the path its equivalent plastic strain {:g} "
                        "allows (|eps_p| <= sqrt(3/2) eps_p_bar)",
                        norm, path);
-  const J2Response again = law_.respond(strain, s);  // the instantaneous (rate-independent) return
+  // The instantaneous return: rate-independent rules' (a rate-dependent rule flows nothing in no time).
+  const J2Response again = law_.respond(strain, s);
   if (again.state.equivalent_plastic_strain - path > accumulated_rounding * std::max(path, initial_yield_ / (3.0 * law_.shear_modulus())))
     return fmt::format("the committed strain lies outside the yield surface of its history (a converged state "
                        "would have returned {:g} more equivalent plastic strain)",

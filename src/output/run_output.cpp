@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <cstdlib>
 #include <stdexcept>
 
@@ -192,7 +193,10 @@ std::vector<LoadHistorySummary::Unloading> LoadHistorySummary::unloadings() cons
     u.step = steps_[k];
     u.depth = depths_[k];
     u.force = forces_[k];
-    u.stiffness = (forces_[k] - forces_[k + 1]) / (depths_[k] - depths_[k + 1]);
+    // A creeping specimen's depth may still rise as the force falls (the "nose"): then the first
+    // increment's secant is no unloading stiffness, and summary.json says null.
+    u.stiffness = depths_[k] > depths_[k + 1] ? (forces_[k] - forces_[k + 1]) / (depths_[k] - depths_[k + 1])
+                                              : std::numeric_limits<double>::quiet_NaN();
     if (k > 0 && depths_[k - 1] != depths_[k])
       u.loading_stiffness = (forces_[k] - forces_[k - 1]) / (depths_[k] - depths_[k - 1]);
     for (std::size_t i = k + 1; i <= b.end; ++i)

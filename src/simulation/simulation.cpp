@@ -194,8 +194,14 @@ IncrementRecord Simulation::advance_to(double target, double duration) {
     stop_if_requested();
     const double reach = std::min(1.0, done + share);
     const double trial = reach == 1.0 ? target : from + reach * span;
-    if (solve_at(trial, (reach - done) * duration, counters, stop_if_requested)) {
-      if (reach != 1.0 && !reported) reported = state();
+    const double time_step = (reach - done) * duration;
+    if (solve_at(trial, time_step, counters, stop_if_requested)) {
+      if (reach != 1.0 && !reported) {
+        // The committed state as it stands: its instantaneous response (commit()'s comment).
+        if (plastic_) plastic_->set_time_step(0.0);
+        reported = state();
+        if (plastic_) plastic_->set_time_step(time_step);
+      }
       from_system(system_guess_, guess_);
       const double depth = solved_depth(trial);
       if (grow_near_field(guess_, depth)) {
@@ -210,7 +216,8 @@ IncrementRecord Simulation::advance_to(double target, double duration) {
       if (last_report_.iterations <= 3) share *= 2.0;
       continue;
     }
-    if (cutbacks >= load_case_.solver.max_cutbacks) {
+    // (Past some 50 halvings a sub-step no longer moves the sum of the converged ones.)
+    if (cutbacks >= load_case_.solver.max_cutbacks || !(done + 0.5 * share > done)) {
       const NewtonReport report = last_report_;  // a copy: returning to the reported state may rebuild the system
       const std::string limit = limit_load_note();  // of the sub-steps that converged, before they are undone
       return_to_reported();
@@ -270,7 +277,9 @@ bool Simulation::solve_at(double trial, double time_step, SolveCounters& counter
 // A converged trial becomes the state: the displacement (guess_, already mapped from the Newton
 // system), the depth, and the material history, which moves with every converged (sub-)step.
 void Simulation::take_committed_branch() {
-  if (plastic_) plastic_->set_loading(control_->loads(state_, control_->committed(state_)));
+  if (!plastic_) return;
+  plastic_->set_loading(control_->loads(state_, control_->committed(state_)));
+  plastic_->set_time_step(0.0);  // the committed state's instantaneous response (commit())
 }
 
 void Simulation::commit(double trial, double depth) {

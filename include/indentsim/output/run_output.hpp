@@ -71,7 +71,7 @@ public:
   struct Unloading {
     int step = 0;                       ///< the increment where unloading starts (the reversal)
     double depth = 0.0, force = 0.0;    ///< state at the reversal
-    double stiffness = 0.0;             ///< S: secant of the first unloading increment [N/m per m]
+    double stiffness = 0.0;             ///< S: secant of the first unloading increment [N/m per m] (NaN: the depth did not fall)
     double loading_stiffness = 0.0;     ///< secant of the last loading increment before it
     bool separated = false;             ///< the punch left the surface on this branch
     double residual_depth = 0.0;        ///< depth where it left: max_k(-v_k - g_k) once P = 0 [m]
