@@ -892,7 +892,10 @@ def main():
     curve = read_csv(outdir / "curve.csv")
     summary = json.loads((outdir / "summary.json").read_text()) if (outdir / "summary.json").is_file() else {}
     measured = read_measured(args, ip.is_axisymmetric(case)) if args.data else None
-    step = args.step if args.step is not None else int(max(curve, key=lambda r: float(r["alpha"]))["step"])
+    # The run's deepest state (the end of a hold at the largest target, whose fields it always
+    # writes); a folder from before summary.json named it: the deepest row.
+    deepest = summary.get("deepest_step", int(max(curve, key=lambda r: float(r["alpha"]))["step"]))
+    step = args.step if args.step is not None else int(deepest)
     rows = [r for r in curve if int(r["step"]) == step]
     if not rows:
         sys.exit(f"{outdir}: the run has no step {step} (steps 0 to {curve[-1]['step']})")

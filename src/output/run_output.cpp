@@ -294,10 +294,14 @@ RunOutput::RunOutput(const std::filesystem::path& dir, const LoadCase& load_case
       curve_(dir / "curve.csv", error_estimate, error_estimate_pending, plan_times(load_case.load)),
       fields_(dir),
       increments_(static_cast<int>(plan_increments(load_case.load).size()) - 1) {
-  // The rows are the planned targets, one each: the deepest state is the first row at the largest
-  // target (a depth, or under force control a force).
+  // The rows are the planned targets, one each: the deepest state is the last row of the first
+  // stay at the largest target (a depth, or under force control a force): the end of a hold there,
+  // after its creep (without a rate-dependent material the hold repeats the state).
   const std::vector<double> targets = plan_increments(load_case.load);
-  deepest_step_ = static_cast<int>(std::max_element(targets.begin(), targets.end()) - targets.begin());
+  auto largest = std::max_element(targets.begin(), targets.end());
+  while (largest + 1 != targets.end() && *(largest + 1) == *largest) ++largest;
+  deepest_step_ = static_cast<int>(largest - targets.begin());
+  run_fields_["deepest_step"] = deepest_step_;  // the state the figures show by default
   for (const CurveBranch& b : unloading_branches(targets)) peak_steps_.push_back(static_cast<int>(b.peak));
   write_file_atomically(dir_ / "case.toml", to_toml(load_case));
   write_file_atomically(dir_ / "summary.json", summary_.json(run_fields_, RunStatus::running, ""));

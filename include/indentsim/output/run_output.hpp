@@ -186,7 +186,7 @@ private:
   CurveWriter curve_;
   FieldSeries fields_;
   int last_step_ = -1, last_fields_step_ = -1;
-  int deepest_step_ = 0;  ///< the first row at the load path's largest target (its deepest state)
+  int deepest_step_ = 0;  ///< the end of the first stay at the load path's largest target (its deepest state)
   int increments_ = 0;          ///< the path's, as run
   int peak_step_ = -1;          ///< the increment that reached it (its fields and tables are kept)
   std::vector<int> peak_steps_;  ///< the planned increments where an unloading branch starts
