@@ -227,6 +227,11 @@ def force_unit(value, axisymmetric=True):
     return prefixed(value, "N/m", ("m", "", "k", "M", "G"))
 
 
+def time_unit(value):
+    """µs, ms or s for a time of this size [s]."""
+    return prefixed(value, "s", ("µ", "m", ""))
+
+
 def stress_unit(value):
     """kPa, MPa or GPa for a stress of this size [Pa]."""
     return prefixed(value, "Pa", ("k", "M", "G"))
@@ -587,6 +592,10 @@ KEY_WORDS = {  # key: (words, symbol, kind of unit: "stress", "length", "degree"
     "material.yield_stress": ("yield stress", "σ$_y$", "stress"), "material.E": ("Young's modulus", "$E$", "stress"),
     "material.nu": ("Poisson's ratio", "ν", None), "material.e0": ("elastic limit", "e$_0$", None),
     "material.n": ("hardening exponent", "$n$", None), "material.kappa": ("hardening", "κ", None),
+    "material.creep_coefficient": ("creep coefficient", "$A$", "rate"),
+    "material.reference_stress": ("reference stress", "σ$_\\mathrm{ref}$", "stress"),
+    "material.reference_strain_rate": ("reference strain rate", "$\\dot\\varepsilon_0$", "rate"),
+    "material.rate_exponent": ("rate exponent", "$m$", None),
     "punch.radius": ("indenter radius", "$R$", "length"),
     "punch.tip_radius": ("tip radius", "$r_\\mathrm{tip}$", "length"),
     "punch.half_angle": ("cone half-angle", "θ", "degree"), "geometry.lx": ("specimen radius", "$l_x$", "length"),
@@ -606,6 +615,8 @@ def key_unit(key, value):
         return length_unit(value)
     if kind == "degree":
         return Unit("°", 1.0)
+    if kind == "rate":
+        return Unit("s$^{-1}$", 1.0)
     if value and abs(value) < 0.01:  # a small number (an elastic limit e0 = 0.004): in thousandths
         return Unit("10$^{-3}$", 1e-3)
     return Unit("", 1.0)

@@ -3,7 +3,8 @@
 
     plot_fit.py DIR [--size slide|column]
 
-Per kind of data (force-depth curves, imprint profiles): the data as measured (markers) with the
+Per kind of data (force-depth curves, imprint profiles, time histories of the depth or the force
+along a protocol in time): the data as measured (markers) with the
 fitted model through the same depths (line), and below it the residuals model - data in a unit of
 their own scale.  Right: the 1- and 2-standard-error confidence ellipses of the two most
 correlated free parameters (linearised, from fit.json's covariance), the parameters' values with
@@ -37,6 +38,14 @@ def data_units(kind, rows, axisymmetric):
         ru = ip.force_unit(e, axisymmetric)
         return (f"indentation depth $h$ [{xu.name}]", xu,
                 f"load $P$ [{yu.name}]" if axisymmetric else f"load $P$ per unit thickness [{yu.name}]", yu, ru)
+    if kind.startswith("history"):
+        xu = ip.time_unit(x)
+        if kind == "history_force":
+            yu, ru = ip.force_unit(y, axisymmetric), ip.force_unit(e, axisymmetric)
+            return (f"time $t$ [{xu.name}]", xu,
+                    f"load $P$ [{yu.name}]" if axisymmetric else f"load $P$ per unit thickness [{yu.name}]", yu, ru)
+        yu = ip.length_unit(y)
+        return f"time $t$ [{xu.name}]", xu, f"indentation depth $h$ [{yu.name}]", yu, ip.length_unit(e)
     xu, yu = ip.length_unit(x), ip.length_unit(y)
     return (f"radial coordinate $r$ [{xu.name}]", xu, f"imprint depth [{yu.name}]", yu, ip.length_unit(e))
 
@@ -163,7 +172,7 @@ def main():
     fit = json.loads((folder / "fit.json").read_text())
     with open(folder / "fit_curves.csv", newline="") as f:
         rows = list(csv.DictReader(f))
-    kinds = [k for k in ("curve", "imprint") if any(r["kind"] == k for r in rows)]
+    kinds = [k for k in ("curve", "imprint", "history_depth", "history_force") if any(r["kind"] == k for r in rows)]
     n = len(kinds)
     slide = args.size == "slide"
     if slide:
@@ -197,7 +206,9 @@ def main():
                     label="model" if len(sets) == 1 else f"model: {name}")
             res.plot(x, ru(np.array([float(r["residual"]) for r in part])), "o", color=colour)
         ax.set_ylabel(y_label)
-        ax.set_title("force–depth curve" if kind == "curve" else "residual imprint")
+        ax.set_title({"curve": "force–depth curve", "imprint": "residual imprint",
+                      "history_depth": "depth in time (force control)",
+                      "history_force": "force in time (depth control)"}[kind])
         ax.legend(loc="lower right" if kind == "curve" else "best")
         ax.tick_params(labelbottom=False)
         res.axhline(0.0, color="#555555", lw=0.8)

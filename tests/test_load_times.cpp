@@ -89,15 +89,17 @@ TEST(LoadTimes, TimesThatDoNotFitThePathAreRefusedByName) {
   EXPECT_EQ(refused({"load.times=[0, 10, 10, 30]"}), "load.times");     // a segment of no duration
   EXPECT_EQ(refused({"load.times=[0, 10, 5, 30]"}), "load.times");      // time running back
   EXPECT_EQ(refused({"load.times=[0, 10, 20, 30]"}), "");
-  // The fit steps the data's depths, not the case's protocol in time.
+  // A force-depth curve is fitted along the data's depths; with its time column, as a time history
+  // along the protocol.
   const LoadCase timed = shipped_case("axisymmetric/elastic_sphere.toml",
                                       {"load.path=[0, 1e-6, 1e-6, 0]", "load.times=[0, 10, 20, 30]"});
   try {
-    refuse_unfittable_load(timed);
-    FAIL() << "the fit took a case with load.times";
+    refuse_unfittable_load(timed, FitDataKind::force_depth_curve);
+    FAIL() << "the fit took a case with load.times for a curve without time";
   } catch (const InputError& e) {
     EXPECT_EQ(e.key(), "load.times");
   }
+  EXPECT_NO_THROW(refuse_unfittable_load(timed, FitDataKind::time_history));
 }
 
 class LoadTimesCli : public indentsim::testing::CliTest {};

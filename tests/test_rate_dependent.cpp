@@ -393,13 +393,14 @@ TEST(RateDependentIndentation, RateKeysAreRefusedByNameWhereTheyCannotApply) {
   odd = with(norton);
   odd.push_back("material.rate_exponent=0.5");
   EXPECT_EQ(refused_key(sphere, odd), "material.rate_exponent");
-  // The fit has no time yet.
-  try {
-    refuse_unfittable_load(indentsim::testing::shipped_case(sphere, with(norton)));
-    FAIL() << "the fit took a rate-dependent material";
-  } catch (const InputError& e) {
-    EXPECT_EQ(e.key(), "material.rate");
-  }
+  // The fit follows a creeping material in time only: a curve without time, or an imprint, is refused.
+  for (const FitDataKind kind : {FitDataKind::force_depth_curve, FitDataKind::imprint_profile})
+    try {
+      refuse_unfittable_load(indentsim::testing::shipped_case(sphere, with(norton)), kind);
+      FAIL() << "the fit took a rate-dependent material without its time history";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.key(), "material.rate");
+    }
 }
 
 class RateDependentCli : public indentsim::testing::CliTest {};
@@ -435,4 +436,69 @@ TEST_F(RateDependentCli, ACreepingForceControlledRunKilledInItsHoldResumesBitFor
             128 + SIGKILL);
   ASSERT_EQ(cli("resume " + (out / "checkpoints").string() + " --quiet"), 0) << err();
   EXPECT_EQ(indentsim::testing::curve_without_timing(out / "curve.csv"), expected);
+}
+
+// The fit follows a load-controlled instrument's protocol in time (docs/MODEL.md §13.4): the depth
+// a force-controlled creeping run reached at each time is fitted for the creep coefficient that
+// produced it.  On the data's own mesh (no refinement) the forward model is the run itself, so the
+// coefficient comes back to the optimiser's tolerance; as an instrument writes the file (time in
+// ms, depth in nm, load in mN, semicolons, named columns) through a fit file, the same.
+TEST_F(RateDependentCli, AForceControlledCreepHistoryIsFittedForTheCreepCoefficientThatMadeIt) {
+  const std::string source = indentsim::testing::source_path("loadcases/axisymmetric/flat_punch.toml");
+  const std::string args =
+      " --set mesh.contact_nodes=8 --set material.model=j2 --set material.rate=norton "
+      "--set material.creep_coefficient=0.01 --set material.reference_stress=1e9 --set material.rate_exponent=3 "
+      "--set load.control=force --set load.path=[0,2,2,0.2] --set load.times=[0,0.1,10,10.1] "
+      "--set load.increments=[4,8,6]";
+  ASSERT_EQ(cli("run " + source + args + " --quiet --out " + (dir_ / "truth").string()), 0) << err();
+  const fs::path truth_case = dir_ / "truth" / "case.toml", truth_curve = dir_ / "truth" / "curve.csv";
+  const std::string quick = " --starts 1 --mesh-refinements 0 --single-level --no-design --no-profile --no-plot --quiet";
+  const auto fitted = [&](const fs::path& folder) {
+    const auto json = nlohmann::json::parse(indentsim::testing::slurp(folder / "fit.json"));
+    EXPECT_EQ(json["data"][0]["kind"], "time_history");
+    EXPECT_EQ(json["data"][0]["response"], "depth");
+    return json["parameters"]["material.creep_coefficient"]["value"].get<double>();
+  };
+  ASSERT_EQ(cli("fit " + truth_case.string() + " --set material.creep_coefficient=0.003 --data " +
+                truth_curve.string() + " --free material.creep_coefficient" + quick + " --out " +
+                (dir_ / "fit").string()),
+            0)
+      << err();
+  EXPECT_NEAR(fitted(dir_ / "fit"), 0.01, 1e-6);
+
+  // The instrument's export of the same curve.
+  const std::vector<std::vector<double>> rows = indentsim::testing::read_curve(truth_curve);
+  std::string text = "Time (ms);Depth (nm);Load (mN)\r\n";
+  for (const auto& r : rows) text += fmt::format("{:.17g};{:.17g};{:.17g}\r\n", 1e3 * r[1], 1e9 * r[2], 1e3 * r[3]);
+  indentsim::testing::write_text(dir_ / "instrument.csv", text);
+  std::string start = indentsim::testing::slurp(truth_case);
+  const auto at = start.find("creep_coefficient = ");
+  ASSERT_NE(at, std::string::npos);
+  start.replace(at, start.find('\n', at) - at, "creep_coefficient = 0.003");
+  indentsim::testing::write_text(dir_ / "start.toml", start);
+  indentsim::testing::write_text(dir_ / "fit.toml", "[fit]\nfree = [\"material.creep_coefficient\"]\n\n[[data]]\n"
+                                                    "case = \"start.toml\"\ncurve = \"instrument.csv\"\n"
+                                                    "time_column = \"Time\"\ndepth_column = \"Depth\"\n"
+                                                    "force_column = \"Load\"\n");
+  ASSERT_EQ(cli("fit " + (dir_ / "fit.toml").string() + quick + " --out " + (dir_ / "instrument").string()), 0)
+      << err();
+  EXPECT_NEAR(fitted(dir_ / "instrument"), 0.01, 1e-6);
+
+  // Refused before any run, naming what is wrong: the curve without its time column (the fit
+  // cannot follow a creeping, force-controlled protocol along depths), a time beyond the protocol's.
+  std::string untimed = "alpha,P\n";
+  for (const auto& r : rows) untimed += fmt::format("{:.17g},{:.17g}\n", r[2], r[3]);
+  indentsim::testing::write_text(dir_ / "untimed.csv", untimed);
+  expect_refused("fit " + (dir_ / "start.toml").string() + " --data " + (dir_ / "untimed.csv").string() +
+                     " --free material.creep_coefficient",
+                 "--time-column");
+  std::string late = text + "20000;300;2\r\n";
+  indentsim::testing::write_text(dir_ / "late.csv", late);
+  expect_refused("fit " + (dir_ / "start.toml").string() + " --data " + (dir_ / "late.csv").string() +
+                     " --time-column Time --depth-column Depth --force-column Load --free material.creep_coefficient",
+                 "outside the protocol's times");
+  // A flow rule's parameter the case's rule does not have.
+  expect_refused("fit " + (dir_ / "start.toml").string() + " --data " + truth_curve.string() +
+                     " --free material.reference_strain_rate",
+                 "material.reference_strain_rate");
 }

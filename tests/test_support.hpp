@@ -99,6 +99,11 @@ inline std::string slurp(const std::filesystem::path& p) {
   return s.str();
 }
 
+/// Writes `text` to `p` as it is (binary: a CRLF stays CRLF).
+inline void write_text(const std::filesystem::path& p, const std::string& text) {
+  std::ofstream(p, std::ios::binary) << text;
+}
+
 /// curve.csv without its wall-clock column (the last one): what must agree between two runs.
 inline std::string curve_without_timing(const std::filesystem::path& file) {
   std::istringstream in(slurp(file));

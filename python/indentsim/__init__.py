@@ -396,20 +396,22 @@ def check(case, overrides=None):
 
 
 def analyze(curve, overrides=None, indenter=None, depth_column="", force_column="", depth_unit="",
-            force_unit="", out=None):
+            force_unit="", out=None, time_column="", time_unit=""):
     """Oliver-Pharr on every unloading branch of a run (its folder) or of a measured CSV, as
     `indentsim analyze`; returns analysis.json's content (written to `out` if given)."""
     measured = _indentsim.MeasuredCurveOptions()
     measured.indenter_file = os.fspath(indenter) if indenter else ""
     measured.depth_column, measured.force_column = depth_column, force_column
     measured.depth_unit, measured.force_unit = depth_unit, force_unit
+    measured.time_column, measured.time_unit = time_column, time_unit
     text = _indentsim.analyze(os.fspath(curve), _overrides(overrides), measured, os.fspath(out) if out else "")
     return json.loads(text)
 
 
 def fit(input, data=None, free=None, bounds=None, overrides=None, starts=None, out=None,
         finite_differences=False, single_level=False, depth_column="", force_column="", depth_unit="",
-        force_unit="", mesh_refinements=None, resume=False, design=True, profile=True, threads=None):
+        force_unit="", mesh_refinements=None, resume=False, design=True, profile=True, threads=None,
+        time_column="", time_unit=""):
     """Material parameters from measured curves, as `indentsim fit`: `input` a load case with
     `data` (a curve file or a list of them) or a fit file; `free` the keys to fit (one key, a list
     of keys, or the CLI's "key,key"); `bounds` {key: (lower, upper)} (or the CLI's
@@ -444,6 +446,7 @@ def fit(input, data=None, free=None, bounds=None, overrides=None, starts=None, o
     c.finite_differences, c.single_level, c.resume = finite_differences, single_level, bool(resume)
     c.no_design, c.no_profile = not design, not profile
     c.depth_column, c.force_column, c.depth_unit, c.force_unit = depth_column, force_column, depth_unit, force_unit
+    c.time_column, c.time_unit = time_column, time_unit
     text, interrupted = _stoppable(_indentsim.fit, c)
     if interrupted:
         raise KeyboardInterrupt("the fit ended as Ctrl-C came; its files are written")

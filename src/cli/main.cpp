@@ -671,7 +671,8 @@ int main(int argc, char** argv) {
              "file with [[data]] tables; writes DIR/fit.json, fit_curves.csv, fitted_case.toml, fit.png");
   fit->add_option("input", fit_options.input, "load case (with --data) or fit file (TOML)")->required();
   fit->add_option("--data", fit_options.data_files, "the measured curve (CSV: alpha [m], P [N] unless told)");
-  fit->add_option("--free", fit_options.free, "parameters to fit: material.E, .nu, .e0 or .yield_stress, .kappa, .n, .K, .prestrain, .Q, .b")
+  fit->add_option("--free", fit_options.free, "parameters to fit: material.E, .nu, .e0 or .yield_stress, .kappa, .n, .K, .prestrain, .Q, .b, "
+                  ".reference_strain_rate, .creep_coefficient, .reference_stress, .rate_exponent")
       ->delimiter(',');
   fit->add_option("--bounds", fit_options.bounds, "bounds of one parameter: material.n=0.01:0.6 (repeat)");
   fit->add_option("--starts", fit_options.starts,
@@ -688,6 +689,10 @@ int main(int argc, char** argv) {
   fit->add_option("--force-column", fit_options.columns.force_column, "the curve's force column (default P)");
   fit->add_option("--depth-unit", fit_options.columns.depth_unit, "nm, um, mm or m (else the header's, else m)");
   fit->add_option("--force-unit", fit_options.columns.force_unit, "mN, uN, nN or N (else the header's, else N)");
+  fit->add_option("--time-column", fit_options.columns.time_column,
+                  "the curve's time column: the curve is then a time history along the case's load.times (default "
+                  "time, when the case has load.times and the header names it)");
+  fit->add_option("--time-unit", fit_options.columns.time_unit, "s, ms or min (else the header's, else s)");
   fit->add_flag("--finite-differences", fit_options.finite_differences, "gradients by finite differences of whole runs");
   fit->add_flag("--single-level", fit_options.single_level,
                 "fit on the cases' own meshes throughout (no coarse phase on half the contact nodes)");

@@ -329,12 +329,12 @@ std::vector<double> spread_start(int k, const std::vector<FreeParameter>& free) 
 /// The unit of a curve's forces in SI: N, or N/m in plane strain.
 const char* si_force_unit(const FitData& d) { return d.load_case.geometry.kind == SceneKind::plane_strain ? "N/m" : "N"; }
 
-/// The key's unit for messages (" Pa" for E and sigma_y).
+/// The key's unit for messages (" Pa" for the stresses, " 1/s" for the rates).
 std::string unit_suffix(MaterialParameter p) {
-  return p == MaterialParameter::E || p == MaterialParameter::yield_stress || p == MaterialParameter::K ||
-                 p == MaterialParameter::Q
-             ? " Pa"
-             : "";
+  using P = MaterialParameter;
+  if (p == P::E || p == P::yield_stress || p == P::K || p == P::Q || p == P::reference_stress) return " Pa";
+  if (p == P::reference_strain_rate || p == P::creep_coefficient) return " 1/s";
+  return "";
 }
 
 void check_problem(const FitProblem& problem) {
@@ -343,7 +343,7 @@ void check_problem(const FitProblem& problem) {
   // Forces push the punch in: P > 0.  A curve whose largest force is negative was exported with
   // the other sign convention (or the column is another one); fitted, it ends at a bound.
   for (const auto& d : problem.data) {
-    if (d.kind != FitDataKind::force_depth_curve || d.values.empty()) continue;
+    if (!values_are_forces(d) || d.values.empty()) continue;
     const double peak = *std::max_element(d.values.begin(), d.values.end(),
                                           [](double a, double b) { return std::abs(a) < std::abs(b); });
     if (peak < 0.0)
@@ -561,7 +561,7 @@ FitResult fit(const FitProblem& problem) {
     for (std::size_t j = 0; j < p; ++j) x[j] = case_start[j] / scale[j];
     for (std::size_t d = 0; d < problem.data.size(); ++d) {
       const FitData& data = problem.data[d];
-      if (data.kind != FitDataKind::force_depth_curve) continue;
+      if (!values_are_forces(data)) continue;
       const std::vector<double>* model = level.costs[d]->values_at(x);
       if (!model) continue;
       double data_peak = 0.0, model_peak = 0.0;
@@ -992,7 +992,8 @@ FitResult fit(const FitProblem& problem) {
         FitData other = problem.data[d];
         other.load_case.mesh.contact_nodes = companion_nodes;
         other.load_case.load.multiply_increments(increments_factor);
-        other.load_case.mesh.contact_half_width = models[d]->planned_contact_half_width();
+        if (models[d]->planned_contact_half_width() > 0.0)  // a flat punch's is its radius
+          other.load_case.mesh.contact_half_width = models[d]->planned_contact_half_width();
         other.load_case.mesh.element = fine_case.mesh.element;
         const ForwardModel model(std::move(other), parameters, bounds, true, theta);
         ModelEvaluation e = model.evaluate(theta, false);
@@ -1586,11 +1587,14 @@ FitResult fit(const FitProblem& problem) {
   for (std::size_t d = 0; d < result.data.size(); ++d) {
     const double misfit = result.data[d].rms_relative;
     if (misfit <= poor_fit_rms_limit) continue;  // NaN (no data) fails too
-    const bool curve = problem.data[d].kind == FitDataKind::force_depth_curve;
+    const FitData& data = problem.data[d];
     result.quality_problems.push_back(
         fmt::format("{}rms {} of the {}",
-                    problem.data.size() > 1 ? fmt::format("data set {} ({}): ", d + 1, problem.data[d].file) : "",
-                    percent(misfit), curve ? "peak force" : "deepest imprint depth"));
+                    problem.data.size() > 1 ? fmt::format("data set {} ({}): ", d + 1, data.file) : "",
+                    percent(misfit),
+                    values_are_forces(data)                       ? "peak force"
+                    : data.kind == FitDataKind::imprint_profile ? "deepest imprint depth"
+                                                                : "largest depth"));
   }
   for (std::size_t j = 0; j < p; ++j) {
     const FreeParameter& f = problem.free[j];

@@ -124,11 +124,16 @@ FitData read_curve_data(const std::filesystem::path& file, LoadCase lc, CurveCol
     columns.depth_column = "alpha";
     columns.force_column = "P";
   }
+  // A case with a protocol in time reads the curve's time column (a run's curve.csv names it "time").
+  if (!lc.load.times.empty() && columns.time_column.empty() && !columns.depth_column.empty() &&
+      header_names(file, "time", columns.depth_column))
+    columns.time_column = "time";
   // A plane-strain case's P is a force per unit thickness (N/m), an axisymmetric one's a force (N):
   // a curve whose unit (given, or in its header) says the other is data of the other scene.
   const bool plane_strain = lc.geometry.kind == SceneKind::plane_strain;
   columns.default_depth_unit = "m";
   columns.default_force_unit = plane_strain ? "N/m" : "N";
+  columns.default_time_unit = "s";
   columns.force_per_length = true;
   const LoadDepthCurve curve = read_curve_csv(file, columns);
   if (curve.force_unit_declared && is_per_length_force_unit(curve.force_unit) != plane_strain) {
@@ -147,8 +152,24 @@ FitData read_curve_data(const std::filesystem::path& file, LoadCase lc, CurveCol
                           printable(curve.force_unit, 20), from, lc.source));
   }
   FitData d;
-  d.kind = FitDataKind::force_depth_curve;
   d.file = file.string();
+  if (!curve.time.empty()) {
+    // A time history (docs/MODEL.md §13.6): the response at the data's times, the depth under
+    // force control; the start of the protocol is the unloaded state, no information.
+    const bool depth_response = lc.load.control == LoadControlKind::force;
+    const double start = lc.load.times.empty() ? 0.0 : lc.load.times.front();
+    d.kind = FitDataKind::time_history;
+    d.column = depth_response ? columns.depth_column : columns.force_column;
+    d.unit = depth_response ? curve.depth_unit : curve.force_unit;
+    d.load_case = std::move(lc);
+    for (std::size_t i = 0; i < curve.time.size(); ++i) {
+      if (curve.time[i] == start) continue;
+      d.abscissa.push_back(curve.time[i]);
+      d.values.push_back(depth_response ? curve.depth[i] : curve.force[i]);
+    }
+    return d;
+  }
+  d.kind = FitDataKind::force_depth_curve;
   d.column = columns.force_column.empty() ? "2" : columns.force_column;
   d.unit = curve.force_unit;
   d.load_case = std::move(lc);
@@ -241,8 +262,10 @@ FitJob read_fit_job(const FitCommandLine& cl) {
       const toml::table* t = node.as_table();
       const std::string where = fmt::format("data[{}]", index);
       if (!t) throw InputError(cl.input, where, "must be a table ([[data]])");
-      static const std::vector<std::string> known{"case", "curve", "imprint", "weight", "set", "depth_column", "force_column",
-                                                  "depth_unit", "force_unit", "radius_column", "unit"};
+      static const std::vector<std::string> known{"case",        "curve",        "imprint",    "weight",
+                                                  "set",         "depth_column", "force_column", "depth_unit",
+                                                  "force_unit",  "time_column",  "time_unit",  "radius_column",
+                                                  "unit"};
       for (const auto& [k, v] : *t)
         if (std::find(known.begin(), known.end(), std::string(k.str())) == known.end())
           throw InputError(cl.input, where + "." + printable(std::string(k.str()), 40), "is not a [[data]] key");
@@ -260,7 +283,8 @@ FitJob read_fit_job(const FitCommandLine& cl) {
       FitData d;
       if (curve) {
         CurveColumns columns{text("depth_column").value_or(""), text("force_column").value_or(""),
-                             text("depth_unit").value_or(""), text("force_unit").value_or(""), "", ""};
+                             text("depth_unit").value_or(""), text("force_unit").value_or(""),
+                             text("time_column").value_or(""), text("time_unit").value_or("")};
         d = read_curve_data(base / *curve, std::move(lc), columns);
       } else {
         d.kind = FitDataKind::imprint_profile;
@@ -321,7 +345,7 @@ FitJob read_fit_job(const FitCommandLine& cl) {
   std::size_t points = 0;
   for (const auto& d : problem.data) {
     // The forward model steps the data's depths (forward_model.cpp says so too).
-    refuse_unfittable_load(d.load_case);
+    refuse_unfittable_load(d.load_case, d.kind);
     points += d.values.size();
     if (d.kind == FitDataKind::force_depth_curve)
       for (std::size_t i = 0; i < d.abscissa.size(); ++i)
@@ -406,15 +430,17 @@ nlohmann::json fit_json(const FitProblem& problem, const FitResult& r) {
   for (std::size_t d = 0; d < problem.data.size(); ++d) {
     const auto& in = problem.data[d];
     const auto& out = r.data[d];
-    const bool curve = in.kind == FitDataKind::force_depth_curve;
+    const bool forces = values_are_forces(in);
+    const bool history = in.kind == FitDataKind::time_history;
     data.push_back({{"file", in.file},
                     {"case", in.load_case.source},
-                    {"kind", curve ? "force_depth_curve" : "imprint_profile"},
+                    {"kind", history ? "time_history" : forces ? "force_depth_curve" : "imprint_profile"},
+                    {"response", history ? json(forces ? "force" : "depth") : json(nullptr)},
                     {"points", in.values.size()},
                     {"rows", in.rows > 0 ? in.rows : in.values.size()},
                     {"weight", in.weight},
                     {"rms_residual", out.rms_residual},
-                    {"rms_residual_unit", curve ? (in.load_case.geometry.kind == SceneKind::plane_strain ? "N/m" : "N") : "m"},
+                    {"rms_residual_unit", forces ? (in.load_case.geometry.kind == SceneKind::plane_strain ? "N/m" : "N") : "m"},
                     {"rms_relative", out.rms_relative},
                     {"gradients", out.gradients},
                     {"mesh_contact_half_width", out.contact_half_width_planned}});
@@ -456,10 +482,15 @@ nlohmann::json fit_json(const FitProblem& problem, const FitResult& r) {
 }
 
 std::string fit_curves_csv(const FitProblem& problem, const FitResult& r) {
+  // x: alpha [m], r [m] or t [s]; data and model: P, the imprint's depth, or a time history's
+  // response (history_depth: alpha [m] under force control; history_force: P).
   std::string out = "data_set,kind,x,data,model,residual\n";
   for (std::size_t d = 0; d < problem.data.size(); ++d) {
     const auto& in = problem.data[d];
-    const char* kind = in.kind == FitDataKind::force_depth_curve ? "curve" : "imprint";
+    const char* kind = in.kind == FitDataKind::force_depth_curve ? "curve"
+                       : in.kind == FitDataKind::imprint_profile ? "imprint"
+                       : values_are_forces(in)                  ? "history_force"
+                                                                : "history_depth";
     for (std::size_t i = 0; i < in.values.size(); ++i)
       out += fmt::format("{},{},{:.10g},{:.10g},{:.10g},{:.10g}\n", d + 1, kind, in.abscissa[i], in.values[i],
                          r.data[d].model[i], r.data[d].model[i] - in.values[i]);

@@ -79,24 +79,98 @@ std::optional<double> local_value(const std::vector<double>& x, const std::vecto
 
 }  // namespace
 
-void refuse_unfittable_load(const LoadCase& lc) {
-  // A force-controlled forward model (the protocol of a load-controlled instrument) is not built
-  // yet (docs/MODEL.md §13).
-  if (lc.load.control == LoadControlKind::force)
-    throw InputError(lc.source, "load.control",
-                     "the fit runs its forward model under depth control at the data's depths: give the case with "
-                     "load.control = \"depth\" (fitting a force-controlled protocol is not built yet)");
-  if (lc.material.rate != RateLaw::none)
-    throw InputError(lc.source, "material.rate",
-                     "the fit runs its forward model along the data's depths, without time: a rate-dependent "
-                     "material cannot be fitted yet (fitting a protocol in time is not built)");
-  if (!lc.load.times.empty())
-    throw InputError(lc.source, "load.times",
-                     "the fit runs its forward model along the data's depths, not along the case's path in time: "
-                     "leave load.times out of the fit's case (a rate-independent material does not need it)");
+bool values_are_forces(const FitData& data) {
+  return data.kind == FitDataKind::force_depth_curve ||
+         (data.kind == FitDataKind::time_history && data.load_case.load.control == LoadControlKind::depth);
 }
 
+void refuse_unfittable_load(const LoadCase& lc, FitDataKind kind) {
+  if (kind == FitDataKind::time_history) {
+    if (lc.load.times.empty())
+      throw InputError(lc.source, "load.times",
+                       "a time history (a curve read with its time column) is fitted along the case's protocol in "
+                       "time: give load.times beside load.path");
+    return;
+  }
+  // A curve is run along the data's own depths under depth control, an imprint after the case's
+  // path without time (docs/MODEL.md §13.6).
+  if (kind == FitDataKind::imprint_profile) {
+    const char* key = lc.load.control == LoadControlKind::force ? "load.control"
+                      : lc.material.rate != RateLaw::none     ? "material.rate"
+                      : !lc.load.times.empty()                ? "load.times"
+                                                              : nullptr;
+    if (key)
+      throw InputError(lc.source, key,
+                       "an imprint is fitted after the case's depth-controlled path without time (an imprint after a "
+                       "protocol in time is not built): fit the protocol's curve as a time history instead");
+    return;
+  }
+  const char* as_history = "give the curve's time column (--time-column, or time_column in [[data]]) and load.times "
+                           "beside load.path: the fit then follows the protocol in time";
+  if (lc.load.control == LoadControlKind::force)
+    throw InputError(lc.source, "load.control",
+                     fmt::format("a force-depth curve without time is fitted along the data's depths under depth "
+                                 "control: {} (a rate-independent material's P(alpha) does not depend on the control, "
+                                 "so load.control = \"depth\" fits the same curve)",
+                                 as_history));
+  if (lc.material.rate != RateLaw::none)
+    throw InputError(lc.source, "material.rate",
+                     fmt::format("a rate-dependent material's response depends on time, not on the depth alone: {}",
+                                 as_history));
+  if (!lc.load.times.empty())
+    throw InputError(lc.source, "load.times",
+                     "a force-depth curve without time is fitted along the data's depths, not along the case's path "
+                     "in time: give the curve's time column (--time-column, or time_column in [[data]]) to fit it as "
+                     "a time history, or leave load.times out");
+}
+
+namespace {
+
+/// A time history of more than two rows per increment of the case's protocol, as one point at the
+/// end of each increment within the data's times (reduce_to_resolution).
+CurveReduction reduce_time_history(FitData& data) {
+  CurveReduction r;
+  r.rows = r.points = data.abscissa.size();
+  const LoadInput& load = data.load_case.load;
+  const std::vector<double> times = plan_times(load);
+  if (times.size() < 2 || data.abscissa.size() <= 2 * (times.size() - 1)) return r;
+  std::vector<double> t, value;
+  for (std::size_t k = 1; k < times.size(); ++k) {
+    const double half_width = 0.5 * (times[k] - times[k - 1]);
+    if (const auto v = local_value(data.abscissa, data.values, times[k], half_width)) {
+      t.push_back(times[k]);
+      value.push_back(*v);
+    }
+  }
+  if (t.empty() || t.size() >= data.abscissa.size()) return r;
+  r.reduced = true;
+  r.points = t.size();
+  r.branches = static_cast<int>(load.path.size()) - 1;
+  data.rows = data.abscissa.size();
+  data.abscissa = std::move(t);
+  data.values = std::move(value);
+  r.note = fmt::format(
+      "{}: {} rows of the time history fitted as {} points, one at the end of each increment of the case's protocol "
+      "({} increments over {:.4g} s), each a local quadratic in time through the rows within half an increment; raise "
+      "load.increments to fit more points",
+      data.file, r.rows, r.points, times.size() - 1, load.times.back() - load.times.front());
+  return r;
+}
+
+/// The protocol's target at time t (linear in time along each segment, as the run steps it).
+double target_at(const LoadInput& load, double t) {
+  const auto it = std::upper_bound(load.times.begin(), load.times.end(), t);
+  if (it == load.times.begin()) return load.path.front();
+  if (it == load.times.end()) return load.path.back();
+  const auto k = static_cast<std::size_t>(it - load.times.begin());
+  const double s = (t - load.times[k - 1]) / (load.times[k] - load.times[k - 1]);
+  return load.path[k - 1] + s * (load.path[k] - load.path[k - 1]);
+}
+
+}  // namespace
+
 CurveReduction reduce_to_resolution(FitData& data) {
+  if (data.kind == FitDataKind::time_history) return reduce_time_history(data);
   CurveReduction r;
   r.rows = r.points = data.abscissa.size();
   if (data.kind != FitDataKind::force_depth_curve || data.abscissa.empty() || data.abscissa.size() != data.values.size())
@@ -194,7 +268,7 @@ ForwardModel::ForwardModel(FitData data, std::vector<MaterialParameter> paramete
     : data_(std::move(data)), parameters_(std::move(parameters)), bounds_(bounds) {
   const LoadCase& user = data_.load_case;
   const std::string& file = data_.file;
-  refuse_unfittable_load(user);
+  refuse_unfittable_load(user, data_.kind);
   prepared_ = user;
   // One kinematics for every forward run: "auto" chosen once on the user's case, so that a step
   // of the parameters or a replanned mesh never switches it (the cost stays smooth).
@@ -224,6 +298,8 @@ ForwardModel::ForwardModel(FitData data, std::vector<MaterialParameter> paramete
       prepared_.load.segment_increments.push_back(
           std::max(1, static_cast<int>(std::ceil(std::abs(path_[s] - path_[s - 1]) / step - 1e-9))));
     prepared_.load.increments = prepared_.load.total_increments();
+  } else if (data_.kind == FitDataKind::time_history) {
+    lay_path_through_times();
   } else {
     const auto& path = user.load.path;
     if (path.back() != 0.0 || !std::any_of(path.begin(), path.end(), [](double a) { return a > 0.0; }))
@@ -258,6 +334,7 @@ ForwardModel::ForwardModel(FitData data, std::vector<MaterialParameter> paramete
 
   // Forward sensitivities where the state is a function of depth and theta alone.
   if (finite_differences_only) fd_reason_ = "finite differences asked for";
+  else if (data_.kind == FitDataKind::time_history) fd_reason_ = "a protocol in time carries its history";
   else if (user.material.model == MaterialModel::j2) fd_reason_ = "J2 flow theory carries its history";
   else if (user.contact.friction > 0.0) fd_reason_ = "friction carries its slip history";
   else if (std::count(parameters_.begin(), parameters_.end(), MaterialParameter::nu))
@@ -269,8 +346,56 @@ void ForwardModel::replan_mesh(const std::vector<double>& theta) {
   LoadCase lc = data_.load_case;
   for (std::size_t j = 0; j < parameters_.size(); ++j) set_value(lc.material, parameters_[j], theta[j]);
   validate(lc);
+  // Force control: the depth the largest force reaches sizes the mesh; fixed with it for every run.
+  lc = with_depth_estimate(std::move(lc));
+  prepared_.load.depth_estimate = lc.load.depth_estimate;
   const RunPlan plan = plan_run(lc);
-  prepared_.mesh.contact_half_width = plan.mesh.contact_half_width_estimate;
+  // A flat punch's mesh is sized from its radius, fixed already.
+  if (lc.punch.shape != PunchShapeKind::flat) prepared_.mesh.contact_half_width = plan.mesh.contact_half_width_estimate;
+}
+
+void ForwardModel::lay_path_through_times() {
+  // Every data time a waypoint of the protocol (whose targets are linear in time along each
+  // segment, so the protocol is unchanged), each piece stepped at its segment's own increment.
+  const LoadCase& user = data_.load_case;
+  const LoadInput& load = user.load;
+  const std::vector<int> per_segment = segment_increments(load);
+  const double start = load.times.front(), end = load.times.back();
+  const double tolerance = 1e-12 * (end - start);
+  std::vector<double> times = load.times;
+  for (std::size_t i = 0; i < data_.abscissa.size(); ++i) {
+    const double t = data_.abscissa[i];
+    if (!(t > start && t <= end + tolerance))
+      throw InputError(data_.file, fmt::format("row {}", i + 1),
+                       fmt::format("time {:.6g} s is outside the protocol's times ({:.6g}, {:.6g}] s ({}: load.times)", t,
+                                   start, end, user.source));
+    times.push_back(std::min(t, end));
+  }
+  std::sort(times.begin(), times.end());
+  path_.clear();
+  for (double t : times)
+    if (path_.empty() || t - path_.back() > tolerance) path_.push_back(t);
+  prepared_.load.times = path_;
+  prepared_.load.path.clear();
+  prepared_.load.segment_increments.clear();
+  for (std::size_t k = 0; k < path_.size(); ++k) {
+    prepared_.load.path.push_back(target_at(load, path_[k]));
+    if (k == 0) continue;
+    // The protocol's segment holding this piece, and its own increment length.
+    const double middle = 0.5 * (path_[k - 1] + path_[k]);
+    const auto s = static_cast<std::size_t>(
+        std::min<std::ptrdiff_t>(std::upper_bound(load.times.begin(), load.times.end(), middle) - load.times.begin(),
+                                 static_cast<std::ptrdiff_t>(load.times.size()) - 1) - 1);
+    const double step = (load.times[s + 1] - load.times[s]) / std::max(1, per_segment[s]);
+    prepared_.load.segment_increments.push_back(
+        std::max(1, static_cast<int>(std::ceil((path_[k] - path_[k - 1]) / step - 1e-9))));
+  }
+  prepared_.load.increments = prepared_.load.total_increments();
+  point_of_waypoint_.clear();
+  for (double t : data_.abscissa) {
+    const auto it = std::lower_bound(path_.begin(), path_.end(), std::min(t, end) - tolerance);
+    point_of_waypoint_.push_back(static_cast<std::size_t>(it - path_.begin()));
+  }
 }
 
 LoadCase ForwardModel::case_at(const std::vector<double>& theta) const {
@@ -293,19 +418,21 @@ std::vector<double> ForwardModel::run_once(const LoadCase& base, int refinement,
   Simulation sim(lc);
   const std::size_t points = data_.abscissa.size();
   std::vector<double> values(points, 0.0);
-  if (data_.kind == FitDataKind::force_depth_curve) {
-    // The increments that end a waypoint of the path (the data depths).
+  if (data_.kind == FitDataKind::force_depth_curve || data_.kind == FitDataKind::time_history) {
+    // The increments that end a waypoint of the path (the data depths, or times), and the response
+    // recorded there: the force, or the depth under force control.
+    const bool depth_response = lc.load.control == LoadControlKind::force;
     std::vector<std::size_t> waypoint_of_step{0};
     for (std::size_t s = 0; s < lc.load.segment_increments.size(); ++s)
       for (int k = 1; k <= lc.load.segment_increments[s]; ++k) waypoint_of_step.push_back(k == lc.load.segment_increments[s] ? s + 1 : 0);
     bool available = true;  // sensitivities at every data depth (else the jacobian stays empty)
     std::vector<double> force_at(path_.size(), 0.0);
     std::vector<std::vector<double>> sensitivity_at(path_.size());
-    std::size_t step = 0;
     sim.run([&](const IncrementRecord& r) {
-      const std::size_t waypoint = waypoint_of_step[step++];
+      const auto step = static_cast<std::size_t>(r.step);
+      const std::size_t waypoint = step < waypoint_of_step.size() ? waypoint_of_step[step] : 0;
       if (waypoint == 0) return;
-      force_at[waypoint] = r.force;
+      force_at[waypoint] = depth_response ? r.alpha : r.force;
       if (jacobian && available) {
         auto s = sim.force_sensitivities(parameters_);
         available = s.has_value();

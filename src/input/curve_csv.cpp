@@ -181,7 +181,8 @@ LoadDepthCurve read_curve_csv(const std::filesystem::path& file, const CurveColu
                                    "mN, uN, nN, N", columns.default_force_unit);
   curve.force_unit_declared = declared;
   if (time_col)
-    curve.time_unit = unit_of(columns.time_unit, *time_col, "curve.time_unit", "time", time_unit_factor, "s, ms, min", "");
+    curve.time_unit = unit_of(columns.time_unit, *time_col, "curve.time_unit", "time", time_unit_factor, "s, ms, min",
+                              columns.default_time_unit);
   const double depth_scale = depth_unit_factor(curve.depth_unit),
                force_scale = force_or_per_length_unit_factor(curve.force_unit),
                time_scale = time_col ? time_unit_factor(curve.time_unit) : 0.0;

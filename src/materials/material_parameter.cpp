@@ -14,7 +14,7 @@ struct ParameterName {
   MaterialParameter parameter;
   const char* key;
 };
-constexpr std::array<ParameterName, 10> names{{{MaterialParameter::E, "material.E"},
+constexpr std::array<ParameterName, 14> names{{{MaterialParameter::E, "material.E"},
                                                {MaterialParameter::nu, "material.nu"},
                                                {MaterialParameter::e0, "material.e0"},
                                                {MaterialParameter::yield_stress, "material.yield_stress"},
@@ -23,7 +23,11 @@ constexpr std::array<ParameterName, 10> names{{{MaterialParameter::E, "material.
                                                {MaterialParameter::K, "material.K"},
                                                {MaterialParameter::prestrain, "material.prestrain"},
                                                {MaterialParameter::Q, "material.Q"},
-                                               {MaterialParameter::b, "material.b"}}};
+                                               {MaterialParameter::b, "material.b"},
+                                               {MaterialParameter::reference_strain_rate, "material.reference_strain_rate"},
+                                               {MaterialParameter::creep_coefficient, "material.creep_coefficient"},
+                                               {MaterialParameter::reference_stress, "material.reference_stress"},
+                                               {MaterialParameter::rate_exponent, "material.rate_exponent"}}};
 
 /// The hardening parameters each law has (besides E and nu).
 std::vector<MaterialParameter> law_parameters(HardeningLaw law) {
@@ -38,6 +42,28 @@ std::vector<MaterialParameter> law_parameters(HardeningLaw law) {
     case HardeningLaw::table: return {};
   }
   return {};
+}
+
+/// The flow rule's own parameters (docs/MODEL.md §13.3).
+std::vector<MaterialParameter> rate_parameters(RateLaw rate) {
+  using P = MaterialParameter;
+  switch (rate) {
+    case RateLaw::none: return {};
+    case RateLaw::perzyna: return {P::reference_strain_rate, P::rate_exponent};
+    case RateLaw::norton: return {P::creep_coefficient, P::reference_stress, P::rate_exponent};
+  }
+  return {};
+}
+
+bool is_rate_parameter(MaterialParameter p) {
+  using P = MaterialParameter;
+  return p == P::reference_strain_rate || p == P::creep_coefficient || p == P::reference_stress || p == P::rate_exponent;
+}
+
+std::string listed(const std::vector<MaterialParameter>& parameters) {
+  std::string list;
+  for (const MaterialParameter p : parameters) list += (list.empty() ? "" : ", ") + key_of(p);
+  return list;
 }
 
 }  // namespace
@@ -72,6 +98,10 @@ double value_of(const MaterialInput& m, MaterialParameter parameter) {
     case MaterialParameter::prestrain: return m.prestrain.value_or(0.0);
     case MaterialParameter::Q: return m.Q.value_or(0.0);
     case MaterialParameter::b: return m.b.value_or(0.0);
+    case MaterialParameter::reference_strain_rate: return m.reference_strain_rate.value_or(0.0);
+    case MaterialParameter::creep_coefficient: return m.creep_coefficient.value_or(0.0);
+    case MaterialParameter::reference_stress: return m.reference_stress.value_or(0.0);
+    case MaterialParameter::rate_exponent: return m.rate_exponent.value_or(0.0);
   }
   return 0.0;
 }
@@ -91,6 +121,10 @@ void set_value(MaterialInput& m, MaterialParameter parameter, double value) {
     case MaterialParameter::prestrain: m.prestrain = value; break;
     case MaterialParameter::Q: m.Q = value; break;
     case MaterialParameter::b: m.b = value; break;
+    case MaterialParameter::reference_strain_rate: m.reference_strain_rate = value; break;
+    case MaterialParameter::creep_coefficient: m.creep_coefficient = value; break;
+    case MaterialParameter::reference_stress: m.reference_stress = value; break;
+    case MaterialParameter::rate_exponent: m.rate_exponent = value; break;
   }
   if (m.yield_stress) m.e0 = e0_of_yield_stress(*m.yield_stress, m.E, m.nu);
 }
@@ -98,13 +132,22 @@ void set_value(MaterialInput& m, MaterialParameter parameter, double value) {
 std::optional<std::string> inapplicable(const MaterialInput& m, MaterialParameter parameter) {
   if (parameter == MaterialParameter::E || parameter == MaterialParameter::nu) return std::nullopt;
   if (m.model == MaterialModel::elastic) return "has no effect: material.model is \"elastic\"";
+  if (is_rate_parameter(parameter)) {
+    const std::vector<MaterialParameter> own = rate_parameters(m.rate);
+    if (std::find(own.begin(), own.end(), parameter) != own.end()) return std::nullopt;
+    return own.empty() ? std::string("has no effect: the case's material is rate-independent (no material.rate)")
+                       : fmt::format("does not belong to this case's material.rate = \"{}\" (its parameters: {})",
+                                     to_string(m.rate), listed(own));
+  }
+  // Norton's creep has no yield surface and no hardening (validation.cpp refuses their keys).
+  if (m.rate == RateLaw::norton)
+    return fmt::format("has no effect under material.rate = \"norton\", which has no yield surface (its parameters: {})",
+                       listed(rate_parameters(m.rate)));
   const std::vector<MaterialParameter> own = law_parameters(m.hardening);
   if (std::find(own.begin(), own.end(), parameter) != own.end()) return std::nullopt;
-  std::string list;
-  for (const MaterialParameter p : own) list += (list.empty() ? "" : ", ") + key_of(p);
   return fmt::format("does not belong to this case's material.hardening = \"{}\" ({})", to_string(m.hardening),
-                     list.empty() ? "a table's points are not fitted: fit a law's parameters instead"
-                                  : "its parameters: " + list);
+                     own.empty() ? "a table's points are not fitted: fit a law's parameters instead"
+                                 : "its parameters: " + listed(own));
 }
 
 std::pair<double, double> physical_range(MaterialParameter parameter) {
@@ -115,7 +158,11 @@ std::pair<double, double> physical_range(MaterialParameter parameter) {
     case MaterialParameter::yield_stress:
     case MaterialParameter::K:
     case MaterialParameter::Q:
-    case MaterialParameter::b: return {0.0, inf};
+    case MaterialParameter::b:
+    case MaterialParameter::reference_strain_rate:
+    case MaterialParameter::creep_coefficient:
+    case MaterialParameter::reference_stress: return {0.0, inf};
+    case MaterialParameter::rate_exponent: return {1.0, 100.0};
     case MaterialParameter::nu: return {-1.0, 0.5};
     case MaterialParameter::kappa: return {0.0, 1.0};
     case MaterialParameter::n:
@@ -140,7 +187,11 @@ std::pair<double, double> default_bounds(MaterialParameter parameter, double sta
     case MaterialParameter::e0:
     case MaterialParameter::prestrain: return {start / 10.0, std::min(start * 10.0, 0.99)};
     case MaterialParameter::Q:
-    case MaterialParameter::b: return {start / 10.0, start * 10.0};
+    case MaterialParameter::b:
+    case MaterialParameter::reference_strain_rate:
+    case MaterialParameter::creep_coefficient:
+    case MaterialParameter::reference_stress: return {start / 10.0, start * 10.0};
+    case MaterialParameter::rate_exponent: return {std::max(1.0, start / 3.0), std::min(100.0, start * 3.0)};
     case MaterialParameter::nu: return {0.0, 0.49};
     case MaterialParameter::kappa: return {0.0, 0.99};
     case MaterialParameter::n: return {0.01, 0.9};

@@ -340,7 +340,13 @@ PYBIND11_MODULE(_indentsim, m) {
           [](FitCommandLine& c, const std::string& v) { c.columns.depth_unit = v; })
       .def_property(
           "force_unit", [](const FitCommandLine& c) { return c.columns.force_unit; },
-          [](FitCommandLine& c, const std::string& v) { c.columns.force_unit = v; });
+          [](FitCommandLine& c, const std::string& v) { c.columns.force_unit = v; })
+      .def_property(
+          "time_column", [](const FitCommandLine& c) { return c.columns.time_column; },
+          [](FitCommandLine& c, const std::string& v) { c.columns.time_column = v; })
+      .def_property(
+          "time_unit", [](const FitCommandLine& c) { return c.columns.time_unit; },
+          [](FitCommandLine& c, const std::string& v) { c.columns.time_unit = v; });
 
   m.def("version", &version_line);
   m.def("run_case", &run_case, py::arg("file"), py::arg("toml_text"), py::arg("source"), py::arg("overrides"),

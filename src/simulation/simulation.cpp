@@ -746,13 +746,17 @@ std::optional<Simulation::Sensitivities> Simulation::sensitivities(const std::ve
         break;
       case MaterialParameter::kappa: combination.push_back({0.0, 0.0, 1.0, 0.0}); break;
       case MaterialParameter::n: combination.push_back({0.0, 0.0, 0.0, 1.0}); break;
-      // nu shapes the condensed far field; K, prestrain, Q and b are J2's, whose history has no
-      // derivative carried (the whole run's finite differences give theirs).
+      // nu shapes the condensed far field; K, prestrain, Q, b and the flow rule's parameters are
+      // J2's, whose history has no derivative carried (the whole run's finite differences give theirs).
       case MaterialParameter::nu:
       case MaterialParameter::K:
       case MaterialParameter::prestrain:
       case MaterialParameter::Q:
-      case MaterialParameter::b: return std::nullopt;
+      case MaterialParameter::b:
+      case MaterialParameter::reference_strain_rate:
+      case MaterialParameter::creep_coefficient:
+      case MaterialParameter::reference_stress:
+      case MaterialParameter::rate_exponent: return std::nullopt;
     }
   }
   // The whole mesh's du/d(theta): the condensed far field is linear elastic, K_FF u_F = -K_FR u_R,

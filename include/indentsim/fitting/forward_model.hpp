@@ -16,6 +16,11 @@
 // loading, and on the unloading branch through the peak strain's own sensitivity -- for any
 // parameter but nu; one-sided finite differences of whole runs for J2 flow theory (its history
 // would need the return map's sensitivity over every increment) and for nu.
+//
+// A time history (docs/MODEL.md §13.6) follows the case's own protocol in time -- force or depth
+// control, holds, a creeping material -- with a waypoint at every data time; the response there
+// (the depth under force control, the force under depth control) is the model.  Its history in
+// time makes it differentiated by finite differences.
 #include <string>
 #include <utility>
 #include <vector>
@@ -27,23 +32,32 @@ namespace indentsim {
 
 enum class FitDataKind {
   force_depth_curve,  ///< P at depths alpha (loading, or a load-unload sequence)
-  imprint_profile     ///< the residual depth of the surface at radii r after the run unloads to 0
+  imprint_profile,    ///< the residual depth of the surface at radii r after the run unloads to 0
+  /// The response at times t along the case's own protocol in time (load.times): the depth under
+  /// force control, the force under depth control (docs/MODEL.md §13.6).
+  time_history
 };
 
 struct FitData {
   FitDataKind kind = FitDataKind::force_depth_curve;
   std::string file;    ///< where the data came from (messages, fit.json)
   LoadCase load_case;  ///< the scene; its material holds the fixed parameters and the starting values
-  /// Curve: the depths alpha [m] in the order they were measured; imprint: the radii r [m].
+  /// Curve: the depths alpha [m] in the order they were measured; imprint: the radii r [m]; time
+  /// history: the times t [s], never decreasing.
   std::vector<double> abscissa;
-  /// Curve: P [N; N/m in plane strain]; imprint: the residual depth below the original surface [m].
+  /// Curve: P [N; N/m in plane strain]; imprint: the residual depth below the original surface [m];
+  /// time history: alpha [m] under force control, P under depth control.
   std::vector<double> values;
   double weight = 1.0;  ///< multiplies this data set's residuals
-  /// Curve: the force column as the file names it, and the unit it was read in (for messages).
+  /// Curve: the force column as the file names it, and the unit it was read in (for messages); a
+  /// time history: the response's column and unit.
   std::string column = "P", unit = "N";
   /// The rows the file held, when reduce_to_resolution() replaced them by fewer points (else 0).
   std::size_t rows = 0;
 };
+
+/// The data's values are forces: a force-depth curve, or a time history under depth control.
+bool values_are_forces(const FitData& data);
 
 /// What reduce_to_resolution() did to a curve.
 struct CurveReduction {
@@ -54,10 +68,11 @@ struct CurveReduction {
   std::string note;                  ///< one line: what was done and why ("" when nothing was)
 };
 
-/// Refuses, naming the key, a load case whose load path the fit's forward model cannot follow: it
-/// steps the data's own depths under depth control, so neither force control nor the case's
-/// path in time (load.times) can be honoured.  Throws InputError naming the case's file.
-void refuse_unfittable_load(const LoadCase& load_case);
+/// Refuses, naming the key, a load case whose load path the fit's forward model cannot follow: a
+/// force-depth curve or an imprint is run along the data's own depths under depth control, so
+/// force control and a rate-dependent material need the protocol in time (load.times) and the
+/// data as a time history.  Throws InputError naming the case's file.
+void refuse_unfittable_load(const LoadCase& load_case, FitDataKind kind);
 
 /// A force-depth curve with many more rows than the model resolves, reduced to what it does.
 /// Every data depth is a waypoint of the fit's forward runs, so a curve of 10^5 rows would cost
@@ -68,7 +83,9 @@ void refuse_unfittable_load(const LoadCase& load_case);
 /// spaced from the branch's first depth to its turning point (kept exactly), each the value at that
 /// depth of a least-squares quadratic through the rows within half a spacing of it (the rows' noise
 /// averaged, the curve's curvature kept; linear interpolation where fewer than 5 rows lie there).
-/// Branches with fewer rows, and imprints, are left as they are.
+/// Branches with fewer rows, and imprints, are left as they are.  A time history of more than two
+/// rows per increment of the case's protocol is replaced by one point at the end of each increment
+/// (the same local quadratic, in time, within half an increment).
 CurveReduction reduce_to_resolution(FitData& data);
 
 /// The model at the data points, and its derivatives if asked.
@@ -108,6 +125,9 @@ public:
   double planned_contact_half_width() const { return prepared_.mesh.contact_half_width.value_or(0.0); }
 
 private:
+  /// A time history: the protocol with a waypoint at every data time (prepared_.load, path_,
+  /// point_of_waypoint_).  Throws InputError for a time outside the protocol's.
+  void lay_path_through_times();
   std::vector<double> run_once(const LoadCase& lc, int refinement, std::vector<std::vector<double>>* jacobian) const;
   std::vector<double> run(const LoadCase& lc, std::vector<std::vector<double>>* jacobian, int& runs) const;
 
@@ -115,7 +135,7 @@ private:
   std::vector<MaterialParameter> parameters_;
   std::vector<std::pair<double, double>> bounds_;
   LoadCase prepared_;  ///< the data's path, the fixed mesh and element
-  std::vector<double> path_;  ///< curve: the data depths without repeats, from 0
+  std::vector<double> path_;  ///< curve: the data depths without repeats, from 0; time history: the waypoint times
   std::vector<std::size_t> point_of_waypoint_;  ///< curve: data point -> index in path_
   bool sensitivities_ = false;
   std::string fd_reason_;

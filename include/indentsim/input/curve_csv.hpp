@@ -26,6 +26,8 @@ struct CurveColumns {
   /// Also accept a force per unit length (N/m, mN/m, uN/m, nN/m): a plane-strain curve, as the fit
   /// reads it.  Off, such a unit is refused as not a force unit.
   bool force_per_length = false;
+  /// The time unit taken when neither given nor in the header ("" : refused); the fit's is s.
+  std::string default_time_unit;
 };
 
 struct LoadDepthCurve {

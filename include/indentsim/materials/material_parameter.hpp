@@ -2,7 +2,9 @@
 // The material parameters a fit may identify, by their load-case keys: material.E, material.nu,
 // material.e0 or material.yield_stress (the uniaxial yield stress users think in; e0 follows from
 // it, e0 = sigma_y / (3 mu)), material.kappa (linear hardening), material.n (the power laws'
-// exponent), material.K, .prestrain (Ludwik, Swift), material.Q, .b (Voce).
+// exponent), material.K, .prestrain (Ludwik, Swift), material.Q, .b (Voce), and a rate-dependent J2's
+// flow rule: material.reference_strain_rate (Perzyna), .creep_coefficient, .reference_stress
+// (Norton), .rate_exponent (both).
 // One place for their names, their values in a load case and their physically safe ranges.
 #include <optional>
 #include <string>
@@ -13,7 +15,10 @@
 
 namespace indentsim {
 
-enum class MaterialParameter { E, nu, e0, yield_stress, kappa, n, K, prestrain, Q, b };
+enum class MaterialParameter {
+  E, nu, e0, yield_stress, kappa, n, K, prestrain, Q, b,
+  reference_strain_rate, creep_coefficient, reference_stress, rate_exponent  ///< the flow rule's (MODEL.md §13.3)
+};
 
 /// "material.E", ...
 std::string key_of(MaterialParameter parameter);
@@ -32,14 +37,16 @@ double value_of(const MaterialInput& material, MaterialParameter parameter);
 void set_value(MaterialInput& material, MaterialParameter parameter, double value);
 
 /// The open interval of values the model accepts: E > 0, -1 < nu < 0.5, e0 and sigma_y > 0,
-/// kappa in [0, 1), n in (0, 1).  A bound outside it is refused.
+/// kappa in [0, 1), n in (0, 1), the rates and the reference stress > 0, the rate exponent in
+/// [1, 100].  A bound outside it is refused.
 std::pair<double, double> physical_range(MaterialParameter parameter);
 /// The closed interval of values a solid plausibly has: the magnitudes the key's declaration states
 /// (plausible_magnitudes: E 1e3 to 2e12 Pa, sigma_y 1e5 to 3e10 Pa), else the physical range.  A
 /// fit's bounds must lie within it (and within the key's declared interval).
 std::pair<double, double> plausible_range(MaterialParameter parameter);
 /// Default fit bounds around a start value: a factor 10 either way for E, e0 and sigma_y (within the
-/// plausible range; e0 below 0.99), nu in [0, 0.49], kappa in [0, 0.99], n in [0.01, 0.9].
+/// plausible range; e0 below 0.99), nu in [0, 0.49], kappa in [0, 0.99], n in [0.01, 0.9]; a factor
+/// 10 for the rates and the reference stress, 3 for the rate exponent (within [1, 100]).
 std::pair<double, double> default_bounds(MaterialParameter parameter, double start);
 
 }  // namespace indentsim
