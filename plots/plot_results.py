@@ -507,6 +507,7 @@ def plot_analysis(path, size):
     report = json.loads(path.read_text())
     depth = np.array(report["curve_si"]["depth"], float)
     force = np.array(report["curve_si"]["force"], float)
+    time = np.array(report["curve_si"]["time"], float) if "time" in report["curve_si"] else None
     axi = report["scene"] == "axisymmetric"
     case, summary, run = analysis_case(report)
     branches = report["branches"]
@@ -557,6 +558,19 @@ def plot_analysis(path, size):
         whole.set_title("whole curve")
         whole.set_xlim(left=0)
         whole.legend(loc="upper left", fontsize=plt.rcParams["legend.fontsize"] * 0.9)
+        hold = b.get("hold")
+        if hold and time is not None:
+            # The hold before this unloading: its creep, depth against time (inset, lower right).
+            k0, k1 = hold["start_index"], ip_
+            inset = whole.inset_axes([0.56, 0.1, 0.4, 0.36])
+            t0, h0 = time[k0], depth[k0]
+            inset.plot(time[k0:k1 + 1] - t0, units.depth(depth[k0:k1 + 1] - h0), "-o", color=ip.LOADING,
+                       ms=plt.rcParams["lines.markersize"] * 0.5, lw=lw * 0.7)
+            small = plt.rcParams["legend.fontsize"] * 0.8
+            inset.set_xlabel("hold time [s]", fontsize=small, labelpad=1)
+            inset.set_ylabel(f"creep [{units.depth.name}]", fontsize=small, labelpad=1)
+            inset.tick_params(labelsize=small * 0.9, pad=1)
+            inset.set_title("hold", fontsize=small, pad=2)
         # Middle: the unloading branch, the fit over its range, S as the tangent at h_max (it
         # meets the depth axis at h_max - P_max / S), and h_f, h_c, h_max.
         touching = slice(ip_, ie + 1)
@@ -616,6 +630,12 @@ def plot_analysis(path, size):
                       "–" if b["true_E_r"] is None else modulus.text(b["true_E_r"], 4)),
                      ("$A_\\mathrm{true}/A_\\mathrm{c}$",
                       f"{b['pile_up_ratio']:.3f} ({'pile-up' if b['pile_up_ratio'] > 1 else 'sink-in'})")]
+        if hold:
+            rows += [("creep in the hold", f"{units.depth.text(hold['creep_depth'], 4)} in {hold['duration_s']:.3g} s")]
+            if hold.get("S_corrected") is not None:
+                rows += [("$S$ (Feng–Ngan)", units.stiffness.text(hold["S_corrected"], 4))]
+            if hold.get("E_corrected") is not None:
+                rows += [("$E$ (Feng–Ngan)", modulus.text(hold["E_corrected"], 4))]
         table_ax.axis("off")
         table = table_ax.table(cellText=[[k, v] for k, v in rows], colLabels=["Oliver-Pharr", "(this branch)"],
                                cellLoc="left", colWidths=[0.47, 0.53], edges="horizontal", bbox=[0, 0, 1, 1])

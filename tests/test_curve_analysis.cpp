@@ -172,6 +172,16 @@ TEST_F(MeasuredCurve, TheCliWritesAnalysisJsonWithUnits) {
   EXPECT_EQ(json["branches"].size(), 1u);
   EXPECT_DOUBLE_EQ(json["branches"][0]["beta"].get<double>(), 1.034);
   EXPECT_NE(out().find("E_r"), std::string::npos);
+  // The terminal speaks the file's units (nm, mN), analysis.json SI: P_max and h_max as read.
+  EXPECT_NE(out().find("depths in nm, forces in mN"), std::string::npos) << out();
+  const double P_max = json["branches"][0]["P_max"].get<double>(), h_max = json["branches"][0]["h_max"].get<double>();
+  EXPECT_NE(out().find(fmt::format("P_max = {:.5g} mN, h_max = {:.5g} nm", P_max / 1e-3, h_max / 1e-9)),
+            std::string::npos)
+      << out();
+  const double H = json["branches"][0]["H"].get<double>();
+  EXPECT_NE(out().find(H >= 1e9 ? fmt::format("H = {:.5g} GPa", H / 1e9) : fmt::format("H = {:.5g} MPa", H / 1e6)),
+            std::string::npos)
+      << out();
 }
 
 TEST_F(MeasuredCurve, BadFilesAreRefusedNamingTheFileAndTheProblem) {

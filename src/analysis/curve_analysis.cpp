@@ -1,6 +1,9 @@
 #include "indentsim/analysis/curve_analysis.hpp"
 
+#include <cmath>
 #include <fstream>
+#include <tuple>
+#include <utility>
 #include <map>
 #include <sstream>
 
@@ -242,44 +245,112 @@ nlohmann::ordered_json analysis_json(const CurveAnalysis& c) {
     j["branches"].push_back(entry);
   }
   j["curve_si"] = {{"depth", c.depth}, {"force", c.force}};
+  if (!c.time.empty()) j["curve_si"]["time"] = c.time;  // the holds' depth against time
   return j;
 }
 
+namespace {
+
+/// The units the terminal table speaks: the input's (a curve read in nm and mN is reported in nm
+/// and mN), or, for a curve in SI (a run's), the prefixed units its peak lies in (nm, um, mm, m;
+/// uN, mN, N), as the figures choose them.  Stresses in Pa, MPa or GPa by size.
+struct TableUnits {
+  std::string length, force;
+  double length_scale = 1.0, force_scale = 1.0;  ///< SI size of one unit
+
+  explicit TableUnits(const CurveAnalysis& c) {
+    double deepest = 0.0, largest = 0.0;
+    for (double h : c.depth) deepest = std::max(deepest, std::abs(h));
+    for (double p : c.force) largest = std::max(largest, std::abs(p));
+    if (c.depth_unit != "m" && depth_unit_factor(c.depth_unit) > 0.0) {
+      length = c.depth_unit;
+      length_scale = depth_unit_factor(c.depth_unit);
+    } else {
+      std::tie(length, length_scale) = length_unit_of(deepest);
+    }
+    const bool per_length = c.scene == SceneKind::plane_strain;
+    if (c.force_unit != "N" && c.force_unit != "N/m" && force_or_per_length_unit_factor(c.force_unit) > 0.0) {
+      force = c.force_unit;
+      force_scale = force_or_per_length_unit_factor(c.force_unit);
+    } else {
+      std::tie(force, force_scale) = largest < 1e-3 ? std::pair{std::string("uN"), 1e-6}
+                                     : largest < 1.0 ? std::pair{std::string("mN"), 1e-3}
+                                                     : std::pair{std::string("N"), 1.0};
+      if (per_length) force += "/m";
+    }
+  }
+  std::string depth(double h) const { return fmt::format("{:.5g} {}", h / length_scale, length); }
+  std::string load(double p) const { return fmt::format("{:.5g} {}", p / force_scale, force); }
+  std::string stiffness(double s) const {
+    const bool per_length = force.size() > 2 && force.substr(force.size() - 2) == "/m";
+    return fmt::format("{:.5g} {}", s * length_scale / force_scale,
+                       per_length ? "(" + force + ")/" + length : force + "/" + length);
+  }
+  /// A radius, and an area, in the unit of their own size (a flat punch's contact radius is
+  /// many depths).
+  static std::string radius(double r) {
+    const auto [name, scale] = length_unit_of(r);
+    return fmt::format("{:.5g} {}", r / scale, name);
+  }
+  static std::string area(double a, bool axisymmetric) {
+    if (!axisymmetric) return radius(a);
+    const auto [name, scale] = length_unit_of(std::sqrt(std::abs(a) / 3.141592653589793));
+    return fmt::format("{:.5g} {}^2", a / (scale * scale), name);
+  }
+  /// nm, um, mm or m for a length of this size.
+  static std::pair<std::string, double> length_unit_of(double size) {
+    return size < 1e-6 ? std::pair{std::string("nm"), 1e-9}
+           : size < 1e-3 ? std::pair{std::string("um"), 1e-6}
+           : size < 1.0  ? std::pair{std::string("mm"), 1e-3}
+                         : std::pair{std::string("m"), 1.0};
+  }
+  static std::string stress(std::optional<double> v) {
+    if (!v) return "-";
+    const double m = std::abs(*v);
+    return m >= 1e9 ? fmt::format("{:.5g} GPa", *v / 1e9)
+           : m >= 1e6 ? fmt::format("{:.5g} MPa", *v / 1e6)
+                      : fmt::format("{:.5g} Pa", *v);
+  }
+};
+
+}  // namespace
+
 std::string analysis_table(const CurveAnalysis& c) {
   const bool axi = c.scene == SceneKind::axisymmetric;
-  const char* force = axi ? "N" : "N/m";
-  const char* stiffness = axi ? "N/m" : "N/m per m";
-  std::string t = fmt::format("{}: {} unloading branch{} ({}, {} indenter; SI units)\n", c.curve_file.string(),
-                              c.branches.size(), c.branches.size() == 1 ? "" : "es", to_string(c.scene),
-                              to_string(c.punch.shape));
-  const auto value = [](const std::optional<double>& v) { return v ? fmt::format("{:.5g}", *v) : std::string("-"); };
+  const TableUnits u(c);
+  std::string t = fmt::format("{}: {} unloading branch{} ({}, {} indenter; depths in {}, forces in {}; analysis.json in SI)\n",
+                              c.curve_file.string(), c.branches.size(), c.branches.size() == 1 ? "" : "es",
+                              to_string(c.scene), to_string(c.punch.shape), u.length, u.force);
+  const auto stress = [](double v) { return TableUnits::stress(v); };
   for (const auto& b : c.branches) {
     const BranchAnalysis& a = b.result;
-    t += fmt::format("  {}: P_max = {:.5g} {}, h_max = {:.5g} m\n", b.label, a.P_max, force, a.h_max);
-    t += fmt::format("    fit P = B (h - h_f)^m over {:g}-{:g}% of P_max: m = {:.4g}, h_f = {:.5g} m, {} points, "
+    t += fmt::format("  {}: P_max = {}, h_max = {}\n", b.label, u.load(a.P_max), u.depth(a.h_max));
+    t += fmt::format("    fit P = B (h - h_f)^m over {:g}-{:g}% of P_max: m = {:.4g}, h_f = {}, {} points, "
                      "rms {:.2g}% of P_max\n",
-                     100 * c.settings.fit_range[0], 100 * c.settings.fit_range[1], a.fit.m, a.fit.h_f, a.fit.points,
-                     100 * a.fit.rms_residual);
-    t += fmt::format("    S = {:.5g} {} (exact: {})   h_c = {:.5g} m   {} = {:.5g} {}\n", a.fit.stiffness, stiffness,
-                     value(a.exact_stiffness), a.h_c, axi ? "A_c" : "2 r(h_c)", a.area, axi ? "m^2" : "m");
-    t += fmt::format("    H = {:.5g} Pa   E_r = {} Pa   E = {} Pa   W_e/W_t = {:.4g}\n", a.hardness,
-                     value(a.reduced_modulus), value(a.specimen_modulus),
+                     100 * c.settings.fit_range[0], 100 * c.settings.fit_range[1], a.fit.m, u.depth(a.fit.h_f),
+                     a.fit.points, 100 * a.fit.rms_residual);
+    t += fmt::format("    S = {} (exact: {})   h_c = {}   {} = {}\n", u.stiffness(a.fit.stiffness),
+                     a.exact_stiffness ? u.stiffness(*a.exact_stiffness) : std::string("-"), u.depth(a.h_c),
+                     axi ? "A_c" : "2 r(h_c)", TableUnits::area(a.area, axi));
+    t += fmt::format("    H = {}   E_r = {}   E = {}   W_e/W_t = {:.4g}\n", stress(a.hardness),
+                     TableUnits::stress(a.reduced_modulus), TableUnits::stress(a.specimen_modulus),
                      a.total_work > 0 ? a.elastic_work / a.total_work : 0.0);
     if (a.true_area)
-      t += fmt::format("    true contact: radius {:.5g} m, H = {} Pa, E_r = {} Pa, pile-up ratio A_true/A_c = {}\n",
-                       *a.true_contact_radius, value(a.true_hardness), value(a.true_reduced_modulus),
-                       value(a.pile_up_ratio));
+      t += fmt::format("    true contact: radius {}, H = {}, E_r = {}, pile-up ratio A_true/A_c = {}\n",
+                       TableUnits::radius(*a.true_contact_radius), TableUnits::stress(a.true_hardness),
+                       TableUnits::stress(a.true_reduced_modulus),
+                       a.pile_up_ratio ? fmt::format("{:.5g}", *a.pile_up_ratio) : std::string("-"));
     if (a.hold) {
       const HoldAnalysis& h = *a.hold;
-      t += fmt::format("    hold before it: {:.4g} s, creep {:.5g} m, dh/dt at its end {:.4g} m/s", h.duration,
-                       h.creep_depth, h.depth_rate);
-      if (h.unloading_rate) t += fmt::format(", unloading at {:.4g} {}/s", *h.unloading_rate, force);
+      t += fmt::format("    hold before it: {:.4g} s, creep {}, dh/dt at its end {}/s", h.duration, u.depth(h.creep_depth),
+                       u.depth(h.depth_rate));
+      if (h.unloading_rate) t += fmt::format(", unloading at {}/s", u.load(*h.unloading_rate));
       t += "\n";
       if (h.corrected)
-        t += fmt::format("    corrected for creep (Feng-Ngan): S = {:.5g} {}   h_c = {:.5g} m   H = {:.5g} Pa   E_r = {} Pa"
-                         "   E = {} Pa\n",
-                         *h.stiffness, stiffness, h.corrected->h_c, h.corrected->hardness,
-                         value(h.corrected->reduced_modulus), value(h.corrected->specimen_modulus));
+        t += fmt::format("    corrected for creep (Feng-Ngan): S = {}   h_c = {}   H = {}   E_r = {}   E = {}\n",
+                         u.stiffness(*h.stiffness), u.depth(h.corrected->h_c), stress(h.corrected->hardness),
+                         TableUnits::stress(h.corrected->reduced_modulus),
+                         TableUnits::stress(h.corrected->specimen_modulus));
     }
     if (!axi) t += "    E_r: not defined in plane strain (a half-plane's compliance depends on the specimen size)\n";
   }
