@@ -405,6 +405,14 @@ TEST(RateDependentIndentation, RateKeysAreRefusedByNameWhereTheyCannotApply) {
 
 class RateDependentCli : public indentsim::testing::CliTest {};
 
+// A flat punch on a Norton-creeping specimen (A = 0.01 /s, sigma_ref = 1 GPa, m = 3), loaded to 2 N
+// in 0.1 s, held 9.9 s and unloaded to 0.2 N in 0.1 s under force control, on a coarse mesh.
+const std::string creeping_flat_punch_flags =
+      " --set mesh.contact_nodes=8 --set material.model=j2 --set material.rate=norton "
+      "--set material.creep_coefficient=0.01 --set material.reference_stress=1e9 --set material.rate_exponent=3 "
+      "--set load.control=force --set load.path=[0,2,2,0.2] --set load.times=[0,0.1,10,10.1] "
+      "--set load.increments=[4,8,6]";
+
 // A force-controlled creeping run killed in its hold resumes to the same curve, bit for bit: the
 // history (plastic strain, equivalent plastic strain) is the checkpoint's, and each row's time
 // and duration follow from the plan.  Its analysis finds the unloading where the force starts to
@@ -412,11 +420,7 @@ class RateDependentCli : public indentsim::testing::CliTest {};
 // creep depth the curve shows.
 TEST_F(RateDependentCli, ACreepingForceControlledRunKilledInItsHoldResumesBitForBit) {
   const std::string source = indentsim::testing::source_path("loadcases/axisymmetric/flat_punch.toml");
-  const std::string args =
-      " --set mesh.contact_nodes=8 --set material.model=j2 --set material.rate=norton "
-      "--set material.creep_coefficient=0.01 --set material.reference_stress=1e9 --set material.rate_exponent=3 "
-      "--set load.control=force --set load.path=[0,2,2,0.2] --set load.times=[0,0.1,10,10.1] "
-      "--set load.increments=[4,8,6] --set output.checkpoint_every=2";
+  const std::string args = creeping_flat_punch_flags + " --set output.checkpoint_every=2";
   ASSERT_EQ(cli("run " + source + args + " --quiet --out " + (dir_ / "full").string()), 0) << err();
   EXPECT_EQ(err().find("only labels the increments"), std::string::npos) << err();
   const std::vector<std::vector<double>> rows = indentsim::testing::read_curve(dir_ / "full" / "curve.csv");
@@ -445,11 +449,7 @@ TEST_F(RateDependentCli, ACreepingForceControlledRunKilledInItsHoldResumesBitFor
 // ms, depth in nm, load in mN, semicolons, named columns) through a fit file, the same.
 TEST_F(RateDependentCli, AForceControlledCreepHistoryIsFittedForTheCreepCoefficientThatMadeIt) {
   const std::string source = indentsim::testing::source_path("loadcases/axisymmetric/flat_punch.toml");
-  const std::string args =
-      " --set mesh.contact_nodes=8 --set material.model=j2 --set material.rate=norton "
-      "--set material.creep_coefficient=0.01 --set material.reference_stress=1e9 --set material.rate_exponent=3 "
-      "--set load.control=force --set load.path=[0,2,2,0.2] --set load.times=[0,0.1,10,10.1] "
-      "--set load.increments=[4,8,6]";
+  const std::string args = creeping_flat_punch_flags;
   ASSERT_EQ(cli("run " + source + args + " --quiet --out " + (dir_ / "truth").string()), 0) << err();
   const fs::path truth_case = dir_ / "truth" / "case.toml", truth_curve = dir_ / "truth" / "curve.csv";
   const std::string quick = " --starts 1 --mesh-refinements 0 --single-level --no-design --no-profile --no-plot --quiet";

@@ -364,17 +364,22 @@ const std::vector<KeyDeclaration>& key_declarations() {
                            [](auto& c) -> auto& { return c.material.n; })));
     // The flow-stress laws' own parameters: written to case.toml only under their law, required
     // there (check_hardening_keys), refused under another.
-    const auto law_number = [&](KeyDeclaration d, auto access, std::initializer_list<HardeningLaw> laws,
-                                const char* needed_by) {
-      const std::vector<HardeningLaw> users(laws);
+    // A number written to case.toml only when the case's `choice` (its hardening law, its flow rule)
+    // is one of `users`: another law's parameter is not part of the case.
+    const auto number_used_by = [&](KeyDeclaration d, auto access, auto users, auto choice, const char* needed_by) {
       KeyDeclaration key = optional_number_key(std::move(d), access);
       key.write = [=](const LoadCase& lc) -> std::optional<std::string> {
         const auto& value = access(lc);
-        if (!value || std::find(users.begin(), users.end(), lc.material.hardening) == users.end()) return std::nullopt;
+        if (!value || std::find(users.begin(), users.end(), choice(lc)) == users.end()) return std::nullopt;
         return toml_number(*value);
       };
       key.default_words = needed_by;
       return key;
+    };
+    const auto law_number = [&](KeyDeclaration d, auto access, std::initializer_list<HardeningLaw> laws,
+                                const char* needed_by) {
+      return number_used_by(std::move(d), access, std::vector<HardeningLaw>(laws),
+                            [](const LoadCase& lc) { return lc.material.hardening; }, needed_by);
     };
     {
       const auto K = [](auto& c) -> auto& { return c.material.K; };
@@ -492,15 +497,8 @@ const std::vector<KeyDeclaration>& key_declarations() {
     // (validate_rate), refused under another.
     const auto rule_number = [&](KeyDeclaration d, auto access, std::initializer_list<RateLaw> rules,
                                  const char* needed_by) {
-      const std::vector<RateLaw> users(rules);
-      KeyDeclaration key = optional_number_key(std::move(d), access);
-      key.write = [=](const LoadCase& lc) -> std::optional<std::string> {
-        const auto& value = access(lc);
-        if (!value || std::find(users.begin(), users.end(), lc.material.rate) == users.end()) return std::nullopt;
-        return toml_number(*value);
-      };
-      key.default_words = needed_by;
-      return key;
+      return number_used_by(std::move(d), access, std::vector<RateLaw>(rules),
+                            [](const LoadCase& lc) { return lc.material.rate; }, needed_by);
     };
     k.push_back(rule_number({"material", "reference_strain_rate", "number", "> 0", "1/s",
                              "perzyna: the strain rate rate0 of eps_p' = rate0 <sigma_e / sigma_y - 1>^m (rate0 -> "
