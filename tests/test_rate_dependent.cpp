@@ -309,6 +309,33 @@ TEST(RateDependentIndentation, AFlatPunchHeldOnALinearViscousHalfSpaceCreepsAtSn
   EXPECT_NEAR(final_creep_rate(finite) / rate, 1.0, 0.01);
 }
 
+// The similarity solution of a flat punch on a power-law creeping half-space (Hill 1992; Bower,
+// Fleck, Needleman and Ogbonna 1993): the contact radius a is fixed, so the steady state is
+// h' / (a eps0') = f(m) (P / (pi a^2 sigma_ref))^m -- the steady punching rate goes as the m-th power
+// of the load.  It holds on the mesh as well: at steady state the elastic strain is constant,
+// equilibrium is linear in the stress and the creep rate homogeneous of degree m in it, so the
+// discrete velocities scale as P^m exactly; what is measured is how far the holds have reached the
+// steady state (A = 100 /s: the far field relaxes within the 10 s hold).  f(1) = 3 pi / 8 is
+// Sneddon's (the test above); f(m) for m > 1 is the paper's table, not checked here.
+TEST(RateDependentIndentation, AFlatPunchsSteadyCreepRateGoesAsTheMthPowerOfTheLoad) {
+  const double A = 100.0, reference = 1e9, m = 3.0, a = 50e-6;
+  const auto steady_rate = [&](double force) {
+    LoadCase lc = creeping_flat_punch(A, reference, m, force, 10.0);
+    lc.load.times = {0.0, 0.001, 10.0};
+    lc.load.segment_increments = {4, 30};
+    lc.load.increments = lc.load.total_increments();
+    const std::vector<TimedRow> rows = run_timed(lc);
+    const std::size_t n = rows.size();
+    return (rows[n - 1].alpha - rows[n - 2].alpha) / (rows[n - 1].time - rows[n - 2].time);
+  };
+  const double low = steady_rate(2.0), high = steady_rate(3.0);
+  const double exponent = std::log(high / low) / std::log(1.5);
+  EXPECT_NEAR(exponent / m, 1.0, 2e-3) << "d ln h' / d ln P = " << exponent;
+  const double f = low / (a * A) / std::pow(2.0 / (M_PI * a * a * reference), m);
+  RecordProperty("f_of_m3", fmt::format("{:.4g}", f));
+  std::printf("flat punch, m = 3: d ln h'/d ln P = %.5f, f(3) = %.4g on this mesh\n", exponent, f);
+}
+
 // Held at a fixed depth instead, the same specimen relaxes: the force falls through the hold.
 TEST(RateDependentIndentation, AHoldAtFixedDepthRelaxesTheForce) {
   const LoadCase lc = indentsim::testing::shipped_case(
