@@ -562,7 +562,7 @@ def plot_analysis(path, size):
         if hold and time is not None:
             # The hold before this unloading: its creep, depth against time (inset, lower right).
             k0, k1 = hold["start_index"], ip_
-            inset = whole.inset_axes([0.56, 0.1, 0.4, 0.36])
+            inset = whole.inset_axes([0.5, 0.12, 0.36, 0.34])
             t0, h0 = time[k0], depth[k0]
             inset.plot(time[k0:k1 + 1] - t0, units.depth(depth[k0:k1 + 1] - h0), "-o", color=ip.LOADING,
                        ms=plt.rcParams["lines.markersize"] * 0.5, lw=lw * 0.7)
@@ -636,6 +636,8 @@ def plot_analysis(path, size):
                 rows += [("$S$ (Feng–Ngan)", units.stiffness.text(hold["S_corrected"], 4))]
             if hold.get("E_corrected") is not None:
                 rows += [("$E$ (Feng–Ngan)", modulus.text(hold["E_corrected"], 4))]
+            if hold.get("stress_exponent") is not None:
+                rows += [("creep exponent $n$", f"{hold['stress_exponent']:.3g}")]
         table_ax.axis("off")
         table = table_ax.table(cellText=[[k, v] for k, v in rows], colLabels=["Oliver-Pharr", "(this branch)"],
                                cellLoc="left", colWidths=[0.47, 0.53], edges="horizontal", bbox=[0, 0, 1, 1])

@@ -162,6 +162,34 @@ TEST_F(MeasuredCurve, AHoldsCreepIsMeasuredAndFengNgansCorrectionGivesTheElastic
   EXPECT_EQ(untimed.branches[0].result.fit.stiffness, a.fit.stiffness);
 }
 
+// A power-law creeping solid under a self-similar tip at constant load creeps as
+// h = c (t - t_s)^(1/(2n)) (the similarity solution; Bower et al. 1993): h'/h = 1/(2n (t - t_s))
+// and H ~ P/h^2 ~ (t - t_s)^(-1/n), so Mayo and Nix's / Lucas and Oliver's
+// d ln(h'/h) / d ln H over the hold is n itself.  The hold's central differences in time err at
+// second order in its 200 steps.  A sphere is not self-similar: no exponent.
+TEST_F(MeasuredCurve, AHoldCreepingAsTheSimilaritySolutionGivesItsStressExponentBack) {
+  const double P_max = 20e-3, h_load = 1000e-9, n = 4.0, t_s = -2.0, t_hold = 6.0, hold = 30.0;
+  std::string text = "Time (s);Depth (nm);Load (mN)\n";
+  const auto row = [&](double t, double h, double P) { text += fmt::format("{:.12g};{:.12g};{:.12g}\n", t, h / 1e-9, P / 1e-3); };
+  for (int k = 0; k <= 60; ++k) row(t_hold * k / 60.0, h_load * k / 60.0, P_max * (k / 60.0) * (k / 60.0));
+  const auto creep = [&](double t) { return h_load * std::pow((t - t_s) / (t_hold - t_s), 1.0 / (2.0 * n)); };
+  for (int k = 1; k <= 200; ++k) row(t_hold + hold * k / 200.0, creep(t_hold + hold * k / 200.0), P_max);
+  const double t_unload = t_hold + hold, h_peak = creep(t_unload);
+  for (int k = 1; k <= 40; ++k)
+    row(t_unload + 0.1 * k, h_peak - 200e-9 * k / 40.0, P_max * std::pow(1.0 - k / 40.0, 1.5));
+  const auto file = write("similar.csv", text);
+  const CurveAnalysis c = analyze_measured_curve(file, cone_setup({"curve.time_column=\"time\""}));
+  ASSERT_EQ(c.branches.size(), 1u);
+  ASSERT_TRUE(c.branches[0].result.hold);
+  ASSERT_TRUE(c.branches[0].result.hold->stress_exponent);
+  EXPECT_NEAR(*c.branches[0].result.hold->stress_exponent / n, 1.0, 1e-3);
+  const CurveAnalysis sphere = analyze_measured_curve(
+      file, read_analysis_setup(std::nullopt, {"punch.shape=\"sphere\"", "punch.radius=10e-6", "curve.depth_column=\"depth\"",
+                                               "curve.force_column=\"load\"", "curve.time_column=\"time\""}));
+  ASSERT_TRUE(sphere.branches.size() == 1u && sphere.branches[0].result.hold);
+  EXPECT_FALSE(sphere.branches[0].result.hold->stress_exponent);
+}
+
 TEST_F(MeasuredCurve, TheCliWritesAnalysisJsonWithUnits) {
   const auto file = write("cone.csv", test.csv(1e-9, 1e-3, "Depth (nm)\tLoad (mN)\tTime (s)"));
   write("berkovich.toml", "[punch]\nshape = \"cone\"\nhalf_angle = 70.3\n[analysis]\nbeta = 1.034\n"

@@ -25,6 +25,7 @@
 #include "indentsim/materials/hardening.hpp"
 #include "indentsim/materials/material.hpp"
 #include "indentsim/simulation/load_stepping.hpp"
+#include "indentsim/simulation/run_configuration.hpp"
 #include "indentsim/simulation/simulation.hpp"
 #include "test_support.hpp"
 
@@ -334,6 +335,28 @@ TEST(RateDependentIndentation, AFlatPunchsSteadyCreepRateGoesAsTheMthPowerOfTheL
   const double f = low / (a * A) / std::pow(2.0 / (M_PI * a * a * reference), m);
   RecordProperty("f_of_m3", fmt::format("{:.4g}", f));
   std::printf("flat punch, m = 3: d ln h'/d ln P = %.5f, f(3) = %.4g on this mesh\n", exponent, f);
+}
+
+// Under force control a creeping specimen is deepest at the end of the hold, not where the force is
+// first reached: the depth pilot follows the hold (MODEL.md §13.1), so the mesh planned from its
+// estimate holds the contact to the end.  Without the creep pilot the estimate was the depth at the
+// start of the hold, 57% of the final one here.
+TEST(RateDependentIndentation, TheDepthPilotOfACreepingHoldReachesTheEndOfTheHold) {
+  const LoadCase lc = indentsim::testing::shipped_case(
+      "axisymmetric/berkovich_creep_hold.toml",
+      {"material.rate_exponent=3", "load.path=[0, 5e-3, 5e-3]", "load.times=[0, 1, 21]", "load.increments=[6, 10]",
+       "mesh.contact_nodes=12"});
+  const LoadCase estimated = with_depth_estimate(lc);
+  ASSERT_TRUE(estimated.load.depth_estimate);
+  Simulation sim(estimated);
+  double start_of_hold = 0.0, deepest = 0.0;
+  sim.run([&](const IncrementRecord& r) {
+    if (r.step == 6) start_of_hold = r.alpha;
+    deepest = std::max(deepest, r.alpha);
+  });
+  EXPECT_GT(deepest, 1.5 * start_of_hold);  // the hold creeps
+  EXPECT_NEAR(*estimated.load.depth_estimate / deepest, 1.0, 0.05)
+      << "estimate " << *estimated.load.depth_estimate << " deepest " << deepest;
 }
 
 // Held at a fixed depth instead, the same specimen relaxes: the force falls through the hold.

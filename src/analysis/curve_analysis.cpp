@@ -346,6 +346,10 @@ std::string analysis_table(const CurveAnalysis& c) {
                        u.depth(h.depth_rate));
       if (h.unloading_rate) t += fmt::format(", unloading at {}/s", u.load(*h.unloading_rate));
       t += "\n";
+      if (h.stress_exponent)
+        t += fmt::format("    creep stress exponent over the hold's last half (Lucas-Oliver): n = {:.4g}, strain-rate "
+                         "sensitivity 1/n = {:.4g}\n",
+                         *h.stress_exponent, 1.0 / *h.stress_exponent);
       if (h.corrected)
         t += fmt::format("    corrected for creep (Feng-Ngan): S = {}   h_c = {}   H = {}   E_r = {}   E = {}\n",
                          u.stiffness(*h.stiffness), u.depth(h.corrected->h_c), stress(h.corrected->hardness),

@@ -249,6 +249,30 @@ double slope_over(const std::vector<double>& x, const std::vector<double>& y, st
 }
 
 constexpr double hold_force_tolerance = 5e-3;  // a hold's force stays within 0.5% of the peak's
+
+// The hold's stress exponent (HoldAnalysis::stress_exponent): under a self-similar tip the
+// indentation strain rate is h'/h and the hardness goes as P / h^d (d = 2, a wedge's 1), so over
+// the hold's last half, by least squares, n = d ln(h'/h) / d ln(P / h^d) -- the power-law
+// creep's m once the creep has forgotten the loading (similarity: h ~ t^(1/(2m)) at constant P).
+// h' by central differences in time.
+std::optional<double> hold_stress_exponent(const std::vector<double>& time, const std::vector<double>& depth,
+                                           const std::vector<double>& force, std::size_t start, std::size_t peak,
+                                           const AnalysisContext& context) {
+  if (!sharp_tip(context.shape)) return std::nullopt;
+  const double d = context.scene == SceneKind::axisymmetric ? 2.0 : 1.0;
+  const std::size_t first = std::max(start + 1, peak - (peak - start) / 2);
+  std::vector<double> log_hardness, log_rate;
+  for (std::size_t k = first; k < peak; ++k) {
+    const double rate = (depth[k + 1] - depth[k - 1]) / (time[k + 1] - time[k - 1]);
+    if (!(rate > 0.0 && depth[k] > 0.0 && force[k] > 0.0)) return std::nullopt;
+    log_hardness.push_back(std::log(force[k]) - d * std::log(depth[k]));
+    log_rate.push_back(std::log(rate / depth[k]));
+  }
+  if (log_hardness.size() < 3) return std::nullopt;
+  const double n = slope_over(log_hardness, log_rate, 0, log_hardness.size() - 1);
+  if (!(n > 0.0) || !std::isfinite(n)) return std::nullopt;
+  return n;
+}
 constexpr double unloading_rate_window = 0.8;  // the unloading rate is taken down to 80% of P_max
 
 }  // namespace
@@ -269,6 +293,7 @@ std::optional<HoldAnalysis> analyze_hold(const std::vector<double>& time, const 
   hold.creep_depth = depth[peak] - depth[start];
   // The depth rate at the hold's end, over its last half (the creep rate decays through a hold).
   hold.depth_rate = slope_over(time, depth, peak - std::max<std::size_t>(1, (peak - start) / 2), peak);
+  hold.stress_exponent = hold_stress_exponent(time, depth, force, start, peak, context);
   std::size_t last = peak + 1;
   while (last + 1 <= branch.end && force[last + 1] >= unloading_rate_window * held) ++last;
   if (last > branch.end) return hold;
@@ -374,6 +399,12 @@ nlohmann::ordered_json branch_json(const BranchAnalysis& a, const AnalysisContex
       hold["E_corrected"] = number_or_null(h.corrected->specimen_modulus);
     }
     hold["correction"] = "Feng and Ngan 2002: 1/S_corrected = 1/S_fit + depth_rate_at_end / unloading_rate";
+    hold["stress_exponent"] = number_or_null(h.stress_exponent);
+    hold["strain_rate_sensitivity"] =
+        number_or_null(h.stress_exponent ? std::optional<double>(1.0 / *h.stress_exponent) : std::nullopt);
+    hold["stress_exponent_method"] =
+        "Mayo and Nix 1988, Lucas and Oliver 1999: n = d ln(h'/h) / d ln(P/h^2) over the hold's last half "
+        "(P/h for a wedge); self-similar tips only";
     j["hold"] = hold;
   } else {
     j["hold"] = nullptr;

@@ -128,6 +128,36 @@ DepthPilot depth_pilot(const LoadCase& lc, double depth) {
   return result;
 }
 
+// The creep pilot of force control (docs/MODEL.md §13.1): a creeping specimen goes on sinking
+// while the force holds, so the deepest depth is reached at the end of the last stay at the
+// largest force, not where that force is first reached.  A coarse force-controlled run of the
+// protocol up to there (at most 4 increments a segment, 8 contact nodes over twice `depth`), its
+// deepest depth returned; `depth` when it fails.
+double creep_pilot_depth(const LoadCase& lc, double depth) {
+  const std::vector<double>& path = lc.load.path;
+  const double largest = lc.load.largest_target();
+  std::size_t last = 0;
+  for (std::size_t k = 0; k < path.size(); ++k)
+    if (path[k] == largest) last = k;
+  LoadCase pilot = coarse_pilot_case(lc, 2.0 * depth);
+  pilot.load = lc.load;
+  pilot.load.depth_estimate = 2.0 * depth;
+  pilot.load.path.assign(path.begin(), path.begin() + static_cast<std::ptrdiff_t>(last) + 1);
+  pilot.load.times.assign(lc.load.times.begin(), lc.load.times.begin() + static_cast<std::ptrdiff_t>(last) + 1);
+  const std::vector<int> per_segment = segment_increments(lc.load);
+  pilot.load.segment_increments.clear();
+  for (std::size_t s = 0; s < last; ++s) pilot.load.segment_increments.push_back(std::min(4, per_segment[s]));
+  pilot.load.increments = pilot.load.total_increments();
+  double deepest = depth;
+  try {
+    Simulation sim(pilot);
+    sim.run([&](const IncrementRecord& r) { deepest = std::max(deepest, r.alpha); });
+  } catch (const SolverError&) {
+    return depth;  // the run itself meets what stopped the pilot, and says so
+  }
+  return deepest;
+}
+
 }  // namespace
 
 LoadCase with_depth_estimate(LoadCase lc) {
@@ -160,6 +190,7 @@ LoadCase with_depth_estimate(LoadCase lc) {
     depth = next;
     if (settled) break;
   }
+  if (lc.material.rate != RateLaw::none && !lc.load.times.empty()) depth = creep_pilot_depth(lc, depth);
   lc.load.depth_estimate = depth;
   validate(lc);  // what depends on the deepest depth (a tip's area function over it) is checked now
   return lc;

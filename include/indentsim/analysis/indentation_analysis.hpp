@@ -92,6 +92,11 @@ struct HoldAnalysis {
   /// unloading rate, or when the correction leaves no positive compliance.
   std::optional<double> stiffness;
   std::optional<ContactOfStiffness> corrected;
+  /// The creep stress exponent n = d ln(h'/h) / d ln H over the hold's last half, H ~ P / h^2 (a
+  /// wedge's P / h): Mayo and Nix (Acta Metall. 36, 1988), Lucas and Oliver (Metall. Mater. Trans.
+  /// A 30, 1999); its strain-rate sensitivity is 1/n.  A self-similar tip only (cone, area
+  /// function), with at least three points and a depth rising through them; else none.
+  std::optional<double> stress_exponent;
 };
 
 struct BranchAnalysis {
