@@ -108,6 +108,30 @@ class LoadTimesCli : public indentsim::testing::CliTest {};
 // run killed in its hold resumes to the same curve, times included; a resume that moves the
 // times of rows already written is refused by name.  The analysis reads the run's time: its hold
 // has crept by nothing, and Feng and Ngan's correction leaves the stiffness as it is.
+// A dense time history is fitted at the ends of the protocol's increments, each point from the
+// rows of its own segment: the corner where the ramp meets the hold is kept sharp.  Rows on the
+// exact piecewise-linear response reduce to it exactly (a quadratic through a line), also at the
+// corner, where a window across it would round the corner off by a tenth of an increment's rise.
+TEST(LoadTimes, ADenseTimeHistoryIsReducedToTheProtocolsIncrementsWithoutRoundingItsCorners) {
+  FitData data;
+  data.kind = FitDataKind::time_history;
+  data.file = "dense.csv";
+  data.load_case = shipped_case("axisymmetric/elastic_sphere.toml",
+                                {"load.path=[0, 1e-6, 1e-6]", "load.times=[0, 1, 2]", "load.increments=[4, 4]"});
+  const auto response = [](double t) { return t < 1.0 ? 0.5 * t : 0.5 + 0.1 * (t - 1.0); };
+  for (int k = 1; k <= 2000; ++k) {
+    data.abscissa.push_back(2.0 * k / 2000.0);
+    data.values.push_back(response(data.abscissa.back()));
+  }
+  const CurveReduction r = reduce_to_resolution(data);
+  ASSERT_TRUE(r.reduced);
+  ASSERT_EQ(data.abscissa.size(), 8u);
+  for (std::size_t i = 0; i < 8; ++i) {
+    EXPECT_NEAR(data.abscissa[i], 0.25 * static_cast<double>(i + 1), 1e-12);
+    EXPECT_NEAR(data.values[i], response(data.abscissa[i]), 1e-12) << "t = " << data.abscissa[i];
+  }
+}
+
 TEST_F(LoadTimesCli, CurveRowsCarryTheirTimeThroughAKillAndAResume) {
   const std::string source = indentsim::testing::source_path("loadcases/axisymmetric/berkovich_cone.toml");
   const std::string args = " --set mesh.contact_nodes=8 --set load.path=[0,1e-6,1e-6,0.96e-6] "

@@ -272,6 +272,8 @@ struct TableUnits {
     if (c.force_unit != "N" && c.force_unit != "N/m" && force_or_per_length_unit_factor(c.force_unit) > 0.0) {
       force = c.force_unit;
       force_scale = force_or_per_length_unit_factor(c.force_unit);
+      // A plane-strain curve's force is per unit thickness, whatever its column's unit says.
+      if (per_length && !is_per_length_force_unit(force)) force += "/m";
     } else {
       std::tie(force, force_scale) = largest < 1e-3 ? std::pair{std::string("uN"), 1e-6}
                                      : largest < 1.0 ? std::pair{std::string("mN"), 1e-3}

@@ -375,8 +375,9 @@ void check_problem(const FitProblem& problem) {
     const auto [low, high] = physical_range(f.parameter);
     if (!(f.lower < f.upper))
       throw InputError("fit", key, fmt::format("bounds {}:{} are reversed or empty (lower < upper needed)", f.lower, f.upper));
+    // Open ends but kappa's 0 and the rate exponent's [1, 100] (the key accepts both ends).
     if (!(f.lower >= low && f.upper <= high) || (f.lower == low && low == 0.0 && f.parameter != MaterialParameter::kappa) ||
-        f.upper == high)
+        (f.upper == high && f.parameter != MaterialParameter::rate_exponent))
       throw InputError("fit", key,
                        fmt::format("bounds {}:{} leave the physical range ({}, {})", f.lower, f.upper, low, high));
     // Each bound a value the key accepts (its declared interval) and a solid plausibly has.

@@ -158,11 +158,21 @@ FitData read_curve_data(const std::filesystem::path& file, LoadCase lc, CurveCol
     // force control; the start of the protocol is the unloaded state, no information.
     const bool depth_response = lc.load.control == LoadControlKind::force;
     const double start = lc.load.times.empty() ? 0.0 : lc.load.times.front();
+    const double lc_end = lc.load.times.empty() ? 0.0 : lc.load.times.back();
+    const bool lc_times_empty = lc.load.times.empty();  // refused by name later (load.times)
     d.kind = FitDataKind::time_history;
     d.column = depth_response ? columns.depth_column : columns.force_column;
     d.unit = depth_response ? curve.depth_unit : curve.force_unit;
     d.load_case = std::move(lc);
+    // Every time within the protocol's, checked here where the file's rows are known (a dense
+    // history is reduced to the protocol's increments before the forward model sees it).
+    const double end = lc_end;
     for (std::size_t i = 0; i < curve.time.size(); ++i) {
+      if (!lc_times_empty && !(curve.time[i] >= start && curve.time[i] <= end + 1e-12 * (end - start)))
+        throw InputError(file.string(), fmt::format("row {}", curve.rows[i]),
+                         fmt::format("time {:.6g} s is outside the protocol's times [{:.6g}, {:.6g}] s (load.times of "
+                                     "the load case {})",
+                                     curve.time[i], start, end, d.load_case.source));
       if (curve.time[i] == start) continue;
       d.abscissa.push_back(curve.time[i]);
       d.values.push_back(depth_response ? curve.depth[i] : curve.force[i]);

@@ -134,12 +134,24 @@ CurveReduction reduce_time_history(FitData& data) {
   const LoadInput& load = data.load_case.load;
   const std::vector<double> times = plan_times(load);
   if (times.size() < 2 || data.abscissa.size() <= 2 * (times.size() - 1)) return r;
+  // Each increment's point from the rows of its own protocol segment: a window across a corner of
+  // the protocol (the peak, a hold's start) would round the corner off.
+  const std::vector<int> per_segment = segment_increments(load);
   std::vector<double> t, value;
-  for (std::size_t k = 1; k < times.size(); ++k) {
-    const double half_width = 0.5 * (times[k] - times[k - 1]);
-    if (const auto v = local_value(data.abscissa, data.values, times[k], half_width)) {
-      t.push_back(times[k]);
-      value.push_back(*v);
+  std::size_t k = 0;
+  for (std::size_t s = 0; s < per_segment.size(); ++s) {
+    const auto first = std::lower_bound(data.abscissa.begin(), data.abscissa.end(), load.times[s]);
+    const auto last = std::upper_bound(data.abscissa.begin(), data.abscissa.end(), load.times[s + 1]);
+    const std::vector<double> x(first, last);
+    const std::vector<double> y(data.values.begin() + (first - data.abscissa.begin()),
+                                data.values.begin() + (last - data.abscissa.begin()));
+    for (int i = 0; i < per_segment[s]; ++i) {
+      ++k;
+      const double half_width = 0.5 * (times[k] - times[k - 1]);
+      if (const auto v = local_value(x, y, times[k], half_width)) {
+        t.push_back(times[k]);
+        value.push_back(*v);
+      }
     }
   }
   if (t.empty() || t.size() >= data.abscissa.size()) return r;
@@ -366,7 +378,7 @@ void ForwardModel::lay_path_through_times() {
   for (std::size_t i = 0; i < data_.abscissa.size(); ++i) {
     const double t = data_.abscissa[i];
     if (!(t > start && t <= end + tolerance))
-      throw InputError(data_.file, fmt::format("row {}", i + 1),
+      throw InputError(data_.file, fmt::format("data point {}", i + 1),
                        fmt::format("time {:.6g} s is outside the protocol's times ({:.6g}, {:.6g}] s ({}: load.times)", t,
                                    start, end, user.source));
     times.push_back(std::min(t, end));

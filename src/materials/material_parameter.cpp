@@ -180,17 +180,17 @@ std::pair<double, double> default_bounds(MaterialParameter parameter, double sta
   switch (parameter) {
     case MaterialParameter::E:
     case MaterialParameter::yield_stress:
-    case MaterialParameter::K: {
+    case MaterialParameter::K:
+    case MaterialParameter::reference_strain_rate:
+    case MaterialParameter::creep_coefficient:
+    case MaterialParameter::reference_stress: {
       const auto [low, high] = plausible_range(parameter);
       return {std::max(start / 10.0, low), std::min(start * 10.0, high)};
     }
     case MaterialParameter::e0:
     case MaterialParameter::prestrain: return {start / 10.0, std::min(start * 10.0, 0.99)};
     case MaterialParameter::Q:
-    case MaterialParameter::b:
-    case MaterialParameter::reference_strain_rate:
-    case MaterialParameter::creep_coefficient:
-    case MaterialParameter::reference_stress: return {start / 10.0, start * 10.0};
+    case MaterialParameter::b: return {start / 10.0, start * 10.0};
     case MaterialParameter::rate_exponent: return {std::max(1.0, start / 3.0), std::min(100.0, start * 3.0)};
     case MaterialParameter::nu: return {0.0, 0.49};
     case MaterialParameter::kappa: return {0.0, 0.99};

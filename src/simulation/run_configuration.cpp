@@ -129,24 +129,17 @@ DepthPilot depth_pilot(const LoadCase& lc, double depth) {
 }
 
 // The creep pilot of force control (docs/MODEL.md §13.1): a creeping specimen goes on sinking
-// while the force holds, so the deepest depth is reached at the end of the last stay at the
-// largest force, not where that force is first reached.  A coarse force-controlled run of the
-// protocol up to there (at most 4 increments a segment, 8 contact nodes over twice `depth`), its
-// deepest depth returned; `depth` when it fails.
+// while the force holds -- at the largest force, and at any force held long enough after it -- so
+// the deepest depth is not where the largest force is first reached.  A coarse force-controlled
+// run of the whole protocol (at most 4 increments a segment, 8 contact nodes over twice `depth`),
+// its deepest depth returned; `depth` when it fails.
 double creep_pilot_depth(const LoadCase& lc, double depth) {
-  const std::vector<double>& path = lc.load.path;
-  const double largest = lc.load.largest_target();
-  std::size_t last = 0;
-  for (std::size_t k = 0; k < path.size(); ++k)
-    if (path[k] == largest) last = k;
   LoadCase pilot = coarse_pilot_case(lc, 2.0 * depth);
   pilot.load = lc.load;
   pilot.load.depth_estimate = 2.0 * depth;
-  pilot.load.path.assign(path.begin(), path.begin() + static_cast<std::ptrdiff_t>(last) + 1);
-  pilot.load.times.assign(lc.load.times.begin(), lc.load.times.begin() + static_cast<std::ptrdiff_t>(last) + 1);
   const std::vector<int> per_segment = segment_increments(lc.load);
   pilot.load.segment_increments.clear();
-  for (std::size_t s = 0; s < last; ++s) pilot.load.segment_increments.push_back(std::min(4, per_segment[s]));
+  for (const int n : per_segment) pilot.load.segment_increments.push_back(std::min(4, n));
   pilot.load.increments = pilot.load.total_increments();
   double deepest = depth;
   try {
