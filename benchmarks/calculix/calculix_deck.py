@@ -16,6 +16,13 @@ what expected_difference bounds.
     sigma_u = 3 mu (1 - omega(e_u)) e_u (include/indentsim/materials/material.hpp).  The linear law is two
     points of ccx's table (exact); the power law is tabulated (hardening_table).  Ilyushin's
     deformation theory has no counterpart in ccx;
+  * a coated specimen ([[layer]] tables, from the surface down, over the substrate [material]): one
+    element set and one material per region, numbered as indentsim numbers them (0 the substrate:
+    EBLOCK, SPECIMEN; layer k: ELAYERk, LAYERk), each written as a homogeneous specimen's is.  A
+    row of elements belongs to layer k where its centroid's depth lies strictly inside the band
+    between the layers' cumulative thicknesses above and below layer k, to the substrate below
+    them; indentsim lays each interface on a mesh line, so no element straddles one (checked, and
+    checked against the `region` of indentsim's fields);
   * the punch profile g(x) of MODEL.md is written out here again (sphere, cone with or without a
     spherical tip, flat), independently of src/geometry/punch.cpp.
 Three ways to impose the contact (`contact`):
@@ -50,7 +57,9 @@ CalculiX pitfalls met on the way:
     forces are those of the wedge, so the whole ring's force is 180 times the printed one; the
     wedge's geometry differs from the exact ring's by O(1 degree^2) (with "given" and "gap", ccx's
     P on the elastic scenes is 2.5-2.8e-5 below indentsim's at every increment, whatever the gap
-    stiffness); and the radial force it prints at a node is not that node's radial residual;
+    stiffness; 5.5e-5 above it with a 400 GPa film on a 100 GPa substrate, whose displacements the
+    exact ring's Q1 forces balance to 4e-12 of the largest contact reaction); and the radial force
+    it prints at a node is not that node's radial residual;
   * ccx's stress update went wrong with power-law tables of 200 points or more: P moved 3.8e-3 away
     from the limit that tables of 40, 60, 100 and 120 points converge to (as the square of their
     log step), and ccx ran nine times slower.  Tables of 100 points;
@@ -98,9 +107,37 @@ def point_arrays(vtu):
     return arrays
 
 
+def cell_regions(vtu, ys):
+    """The `region` cell array of a VTU (0 the substrate, k layer k from the surface) as one region per
+    row of elements, j = 0 at the base; None where the VTU has none (a homogeneous run, or an
+    indentsim from before the layers).  A row with two regions is returned as -1: no deck matches it."""
+    piece = ET.parse(vtu).getroot().find("UnstructuredGrid").find("Piece")
+    dtypes = {"Float64": "<f8", "Int32": "<i4", "Int64": "<i8"}
+
+    def decode(array):
+        raw = base64.b64decode("".join(array.text.split()))
+        size = int.from_bytes(raw[:8], "little")
+        return np.frombuffer(raw[8:8 + size], dtype=dtypes[array.get("type")])
+
+    region = next((a for a in piece.find("CellData").findall("DataArray") if a.get("Name") == "region"), None)
+    if region is None:
+        return None
+    cells = {a.get("Name"): a for a in piece.find("Cells").findall("DataArray")}
+    connectivity, offsets = decode(cells["connectivity"]), decode(cells["offsets"])
+    y = point_arrays(vtu)["coordinates"][:, 1]
+    starts = np.concatenate(([0], offsets[:-1]))
+    # A cell's row: where its lowest node lies among the grid's rows (cells in any order).
+    rows = np.searchsorted(ys, [np.min(y[connectivity[a:b]]) for a, b in zip(starts, offsets)])
+    by_row = np.full(len(ys) - 1, -2)
+    for j, r in zip(rows, decode(region)):
+        by_row[j] = r if by_row[j] in (-2, r) else -1
+    return by_row
+
+
 def read_run(run_dir):
     """The scene of an indentsim run folder: its load case, depths, forces, grid and, where the
-    fields of every increment were written, the surface nodes in contact at each."""
+    fields of every increment were written, the surface nodes in contact at each; for a coated
+    specimen also the region of each row of elements as indentsim's fields give it."""
     with open(run_dir / "case.toml", "rb") as f:
         case = tomllib.load(f)
     with open(run_dir / "curve.csv") as f:
@@ -133,7 +170,8 @@ def read_run(run_dir):
         displacements.append(arrays["displacement"][order, :2])
     return dict(case=case, kind=case["geometry"]["kind"], alphas=column["alpha"], forces=column["P"],
                 half_widths=column["a"], largest_strain_intensity=max(column["max_strain_intensity"]), xs=xs, ys=ys,
-                contact_sets=contact_sets, displacements=displacements)
+                contact_sets=contact_sets, displacements=displacements,
+                fields_regions=cell_regions(run_dir / "fields" / "step_000000.vtu", ys))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -164,15 +202,69 @@ def punch_gap(punch):
     raise DeckError(f"punch.shape = \"{shape}\": only sphere, cone and flat are built here")
 
 
-def hardening_table(material, largest_strain_intensity, points=100):
+def region_materials(case):
+    """The specimen's materials by region, numbered as indentsim numbers them: [(key, material)], 0 the
+    substrate ([material]), k the k-th [[layer]] from the surface ([layer.material]); key names the
+    table as indentsim's own messages do."""
+    return [("material", case["material"])] + [(f"layer[{k}].material", layer["material"])
+                                               for k, layer in enumerate(case.get("layer", []), 1)]
+
+
+def check_material(key, material):
+    """Refuses a material this deck cannot write as ccx's (DeckError naming key, the region's table)."""
+    if material["model"] not in ("elastic", "j2"):
+        raise DeckError(f"{key}.model = \"{material['model']}\": ccx has no Ilyushin (deformation) law; "
+                        "compare with model = \"j2\"")
+    if material["model"] == "elastic":
+        return
+    # hardening_table writes out only the Ilyushin-derived linear and power curves; another law
+    # would be tabulated as the power law of its n, silently.
+    if material["hardening"] not in ("linear", "power"):
+        raise DeckError(f"{key}.hardening = \"{material['hardening']}\": only the linear and power laws are "
+                        "tabulated here (hardening_table)")
+    # ccx's *PLASTIC is rate-independent: a flow rule (written to case.toml only when given) would
+    # differ at every increment.
+    if material.get("rate", "none") != "none":
+        raise DeckError(f"{key}.rate = \"{material['rate']}\": ccx's *PLASTIC has no flow rule")
+
+
+def row_regions(scene):
+    """The region of each row of elements (j = 0 at the base), as indentsim numbers them: layer k where
+    the depth of the row's centroid lies strictly inside layer k's band (between the layers'
+    cumulative thicknesses above it and down to it), the substrate below the last layer.  In the
+    tensor-product grid every element of a row has the row's centroid depth."""
+    ys = scene["ys"]
+    bottoms = np.cumsum([layer["thickness"] for layer in scene["case"].get("layer", [])])
+    for k, bottom in enumerate(bottoms, 1):
+        # indentsim lays each interface on a row of nodes; off one, a row of elements would have two
+        # materials, which neither code has.
+        if np.min(np.abs(ys[-1] - ys - bottom)) > 1e-9 * (ys[-1] - ys[0]):
+            raise DeckError(f"layer[{k}]'s bottom, {bottom:g} m below the surface, is on no row of nodes")
+    depths = ys[-1] - 0.5 * (ys[:-1] + ys[1:])
+    regions = np.zeros(len(depths), dtype=int)
+    for k, (top, bottom) in enumerate(zip(np.concatenate(([0.0], bottoms[:-1])), bottoms), 1):
+        regions[(depths > top) & (depths < bottom)] = k
+    # The regions indentsim says it used (its fields' `region`), where it wrote them: the deck's
+    # reading of the layers' depths must be indentsim's, or the two codes solve different problems.
+    fields = scene.get("fields_regions")
+    if fields is not None and not np.array_equal(fields, regions):
+        rows = np.flatnonzero(fields != regions)
+        said = ["two" if r == -1 else int(r) for r in fields[rows]]
+        raise DeckError(f"indentsim's fields put the rows of elements {rows.tolist()} (from the base) in regions "
+                        f"{said}, the layers' depths in {regions[rows].tolist()}")
+    return regions
+
+
+def hardening_table(material, largest_strain_intensity, points=100, key="material"):
     """ccx's *PLASTIC table (von Mises stress, equivalent plastic strain) of indentsim's J2 law, up to
-    twice the largest strain intensity of the run (beyond its last point ccx's curve is flat)."""
+    twice the largest strain intensity of the run (beyond its last point ccx's curve is flat; for a
+    layer, the run's largest, over every region, reaches at least as far as its own)."""
     E, nu, e0 = material["E"], material["nu"], material["e0"]
     mu = E / (2.0 * (1.0 + nu))
     if material["hardening"] == "linear":
         kappa = material["kappa"]
         if kappa == 0.0:
-            raise DeckError("material.kappa = 0 is elastic: no plastic flow to compare")
+            raise DeckError(f"{key}.kappa = 0 is elastic: no plastic flow to compare")
         # omega = kappa (1 - e0/e_u): sigma_u = 3 mu e0 + 3 mu (1 - kappa)(e_u - e0), eps_p = kappa (e_u - e0).
         slope = 3.0 * mu * (1.0 - kappa) / kappa
         top = 100.0
@@ -195,23 +287,28 @@ def expected_difference(scene, points=100):
       * 1e-6: ccx's 7 printed digits and both codes' equilibrium tolerances (measured 1e-8 to 2e-7
         on the plane-strain scenes with an elastic or linear-hardening specimen);
       * axisymmetry: twice (1 degree)^2, the straight-sided 2-degree wedge's departure from the ring
-        (measured 1.6e-4 to 3.0e-4 on the shipped cases, up to 3.9e-4 on 57 random ones);
+        (measured 1.6e-4 to 3.0e-4 on the shipped cases, up to 3.9e-4 on 57 random ones; 4.4e-4 on
+        steel_sphere.toml under a J2 film, 2e-5 m, 2 GPa, n = 0.2, whose displacements the exact
+        ring's Q1 forces, with each region's J2 update, balance to 3e-9 of the largest contact
+        reaction, as they do the homogeneous case's; the same scene in plane strain: 8e-6);
       * the power law's table: n (1 - n) (log step)^2 / 8, the largest relative error of linear
         interpolation between the table's points (on power_law.toml with J2 and on the Berkovich cone
         in plane strain it gives 1.8e-5 and 2.7e-5; measured: 2.6e-6 and 4.0e-6 in P, 7.6e-6 and
         2.1e-5 in the residual).  A node's residual gathers the errors of the four elements around
         it: four times this for the residual (on 28 random plane-strain power-law cases P differed
         by up to 0.8 times it and the residual was up to 2.2 times it, growing as the square of
-        the log step: 3.5 times from 100 to 60 points).
+        the log step: 3.5 times from 100 to 60 points).  On a coated specimen, the largest of its
+        J2 power-law regions' bounds: each region's stress is off by at most its own, so P, and a
+        node's residual even where its four elements lie in two regions, by at most the largest.
     Returns (for P, for the residual)."""
     base = 1e-6
     if scene["kind"] == "axisymmetric":
         base += 2.0 * math.radians(1.0) ** 2
     table = 0.0
-    material = scene["case"]["material"]
-    if material["model"] == "j2" and material["hardening"] == "power":
-        step = math.log(max(2.0, 2.0 * scene["largest_strain_intensity"] / material["e0"])) / (points - 1)
-        table = material["n"] * (1.0 - material["n"]) * step * step / 8.0
+    for _, material in region_materials(scene["case"]):
+        if material["model"] == "j2" and material["hardening"] == "power":
+            step = math.log(max(2.0, 2.0 * scene["largest_strain_intensity"] / material["e0"])) / (points - 1)
+            table = max(table, material["n"] * (1.0 - material["n"]) * step * step / 8.0)
     return base + table, base + 4.0 * table
 
 
@@ -238,11 +335,14 @@ def write_deck(path, scene, contact="replay"):
     units of length_unit(scene), forces in newtons (stresses in N per unit length squared)."""
     unit = length_unit(scene)
     case, xs, ys = scene["case"], scene["xs"] / unit, scene["ys"] / unit
-    material, punch = case["material"], case["punch"]
+    punch = case["punch"]
     stress_unit = 1.0 / (unit * unit)  # pascals per deck stress unit
-    if material["model"] not in ("elastic", "j2"):
-        raise DeckError(f"material.model = \"{material['model']}\": ccx has no Ilyushin (deformation) law; "
-                        "compare with model = \"j2\"")
+    materials = region_materials(case)
+    for key, material in materials:
+        check_material(key, material)
+    # Region k's element set and material: the substrate's keep a homogeneous deck's names.
+    names = [("EBLOCK", "SPECIMEN")] + [(f"ELAYER{k}", f"LAYER{k}") for k in range(1, len(materials))]
+    row_region = row_regions(scene)
     if case["mesh"].get("element") != "q1":
         raise DeckError("mesh.element must be \"q1\": ccx's CPE4/CAX4 have no mean-dilatation (B-bar) variant")
     if contact in ("given", "replay") and scene["contact_sets"] is None:
@@ -253,15 +353,18 @@ def write_deck(path, scene, contact="replay"):
     element = {"plane_strain": "CPE4", "axisymmetric": "CAX4"}[scene["kind"]]
     nx, ny = len(xs), len(ys)
     node = lambda i, j: j * nx + i + 1  # j = 0 the base, j = ny - 1 the loaded surface
-    lines = ["*HEADING", f"indentsim scene, {scene['kind']}, {punch['shape']}, {material['model']}, {nx} x {ny} nodes",
+    models = " on ".join(material["model"] for _, material in materials[1:] + materials[:1])  # surface down
+    lines = ["*HEADING", f"indentsim scene, {scene['kind']}, {punch['shape']}, {models}, {nx} x {ny} nodes",
              "*NODE, NSET=NALL"]
     w = lines.append
     for j in range(ny):
         for i in range(nx):
             w(f"{node(i, j)}, {xs[i]:.12e}, {ys[j]:.12e}, 0.0")
-    w(f"*ELEMENT, TYPE={element}, ELSET=EBLOCK")
     e = 0
     for j in range(ny - 1):
+        if j == 0 or row_region[j] != row_region[j - 1]:
+            # The regions are bands of rows, so each set's elements are one card's.
+            w(f"*ELEMENT, TYPE={element}, ELSET={names[row_region[j]][0]}")
         for i in range(nx - 1):
             e += 1
             w(f"{e}, {node(i, j)}, {node(i + 1, j)}, {node(i + 1, j + 1)}, {node(i, j + 1)}")
@@ -271,16 +374,17 @@ def write_deck(path, scene, contact="replay"):
     lines.extend(f"{node(0, j)}," for j in range(1, ny))
     w("*NSET, NSET=TOP")
     lines.extend(f"{node(i, ny - 1)}," for i in range(nx))
-    w("*MATERIAL, NAME=SPECIMEN")
-    w("*ELASTIC")
-    w(f"{material['E'] / stress_unit:.12e}, {material['nu']:.12g}")
-    if material["model"] == "j2":
-        w("*PLASTIC")
-        table = hardening_table(material, scene["largest_strain_intensity"])
-        lines.extend(f"{stress / stress_unit:.12e}, {strain:.12e}" for stress, strain in table)
-    w("*SOLID SECTION, ELSET=EBLOCK, MATERIAL=SPECIMEN")
-    if element == "CPE4":
-        w("1.0")
+    for (key, material), (elset, name) in zip(materials, names):
+        w(f"*MATERIAL, NAME={name}")
+        w("*ELASTIC")
+        w(f"{material['E'] / stress_unit:.12e}, {material['nu']:.12g}")
+        if material["model"] == "j2":
+            w("*PLASTIC")
+            table = hardening_table(material, scene["largest_strain_intensity"], key=key)
+            lines.extend(f"{stress / stress_unit:.12e}, {strain:.12e}" for stress, strain in table)
+        w(f"*SOLID SECTION, ELSET={elset}, MATERIAL={name}")
+        if element == "CPE4":
+            w("1.0")
     alphas = [alpha / unit for alpha in scene["alphas"]]
     if contact in ("given", "replay"):
         for k in range(1, len(alphas)):
@@ -338,14 +442,17 @@ def write_gap_contact(lines, xs, ys, alphas, scene, gap, rim, node):
         e += 1
         w(f"*ELEMENT, TYPE=GAPUNI, ELSET=G{i}")
         w(f"{e}, {node(i, ny - 1)}, {punch_node}")
-    if scene["case"]["material"]["model"] == "elastic":
-        # Unused, but it makes ccx iterate (see the pitfalls above).
+    materials = [material for _, material in region_materials(scene["case"])]
+    if all(material["model"] == "elastic" for material in materials):
+        # Unused, but it makes ccx iterate (see the pitfalls above); a region's own *PLASTIC does too.
         w("*MATERIAL, NAME=NONLINEAR_TRIGGER")
         w("*ELASTIC")
         w("1.0, 0.0")
         w("*PLASTIC")
         w("1.0e30, 0.0")
-    stiffness = 1e9 * scene["case"]["material"]["E"] * length_unit(scene) ** 2 * h
+    # The penalty against the stiffest region's E: no region's compliance then hides the gap's (the
+    # factor 1e9 leaves P unchanged to the printed digits, see the pitfalls above).
+    stiffness = 1e9 * max(material["E"] for material in materials) * length_unit(scene) ** 2 * h
     if scene["kind"] == "axisymmetric":
         stiffness *= xs[-1] * math.radians(2.0)  # the wedge's circumference at the outer radius
     # The tension of an open gap: the force of a penetration 1e-21 of the deepest depth.

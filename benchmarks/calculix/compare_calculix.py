@@ -7,7 +7,8 @@
 
 For a load case along a monotone path, made elastic by this script (--set material.model=elastic;
 the paper's geometry is loadcases/paper.toml; any scene calculix_deck.py builds: plane strain or
-axisymmetry, sphere, cone or flat punch), and each contact_nodes N:
+axisymmetry, sphere, cone or flat punch, a coated specimen, each layer made elastic too), and each
+contact_nodes N:
   1. indentsim runs the case (the median of --repeats whole runs, process start to exit, with the
      error estimate off and on), then once more writing the fields of step 0, whose grid is
      indentsim's mesh;
@@ -43,23 +44,30 @@ from calculix_deck import DeckError, forces_of, length_unit, read_run, run_ccx, 
 ELASTIC = ["--set", "material.model=elastic", "--set", "mesh.element=q1"]
 
 
+def elastic_overrides(case):
+    """ELASTIC for a load case: a coated specimen's every layer made elastic as well as its substrate
+    (the gap contact is for elastic scenes: calculix_deck.py)."""
+    layers = len(case.get("layer", []))
+    return ELASTIC + [item for k in range(1, layers + 1) for item in ("--set", f"layer.{k}.material.model=elastic")]
+
+
 def fail(message):
     sys.exit(f"compare_calculix: {message}")
 
 
 def check_case(path):
     """The comparison is of the final P along a monotone path (its Richardson reference); returns
-    the unit of P in the case's scene."""
+    the unit of P in the case's scene and the overrides that make it elastic."""
     with open(path, "rb") as f:
         case = tomllib.load(f)
     waypoints = case.get("load", {}).get("path", [])
     if len(waypoints) != 2 or waypoints[0] != 0.0:
         fail(f"{path}: load.path: only a monotone path [0, alpha] is compared here")
-    return "N" if case.get("geometry", {}).get("kind") == "axisymmetric" else "N/m"
+    return "N" if case.get("geometry", {}).get("kind") == "axisymmetric" else "N/m", elastic_overrides(case)
 
 
-def run_indentsim(exe, case, nodes, increments, out, extra=()):
-    args = [str(exe), "run", str(case), "--out", str(out), "-q", *ELASTIC,
+def run_indentsim(exe, case, nodes, increments, out, elastic, extra=()):
+    args = [str(exe), "run", str(case), "--out", str(out), "-q", *elastic,
             "--set", f"mesh.contact_nodes={nodes}", "--set", f"load.increments={increments}", *extra]
     start = time.perf_counter()
     proc = subprocess.run(args, capture_output=True, text=True)
@@ -131,19 +139,19 @@ def main():
     args = ap.parse_args()
     if shutil.which(args.ccx) is None:
         fail(f"{args.ccx} not found: apt-get install calculix-ccx")
-    unit = check_case(args.case)
+    unit, elastic = check_case(args.case)
     work = args.keep or pathlib.Path(tempfile.mkdtemp(prefix="compare_calculix_"))
     work.mkdir(parents=True, exist_ok=True)
 
     rows = []
     for n in args.contact_nodes:
         base = work / f"N{n}"
-        off = [run_indentsim(args.indentsim, args.case, n, args.increments, base / "indentsim",
+        off = [run_indentsim(args.indentsim, args.case, n, args.increments, base / "indentsim", elastic,
                              ["--set", "mesh.error_estimate=off"]) for _ in range(args.repeats)]
-        on = [run_indentsim(args.indentsim, args.case, n, args.increments, base / "indentsim_estimate")
+        on = [run_indentsim(args.indentsim, args.case, n, args.increments, base / "indentsim_estimate", elastic)
               for _ in range(args.repeats)]
         force, _ = final_force(base / "indentsim")
-        run_indentsim(args.indentsim, args.case, n, args.increments, base / "grid",
+        run_indentsim(args.indentsim, args.case, n, args.increments, base / "grid", elastic,
                       ["--set", "mesh.error_estimate=off", "--set", "output.fields_every=1000"])
         p_ccx, ccx_wall, dofs = ccx_force(args.ccx, base / "grid", base / "ccx")
         rows.append(dict(nodes=n, dofs=dofs, force=force, ccx_force=p_ccx, off=statistics.median(off),
@@ -156,7 +164,7 @@ def main():
     if len(rows) >= 2:
         n1, n2 = rows[-2]["nodes"], rows[-1]["nodes"]
         n3 = args.reference_nodes or 2 * n2
-        run_indentsim(args.indentsim, args.case, n3, args.increments, work / f"N{n3}_reference",
+        run_indentsim(args.indentsim, args.case, n3, args.increments, work / f"N{n3}_reference", elastic,
                       ["--set", "mesh.error_estimate=off", "--set", "output.fields_every=0"])
         f1, f2, f3 = rows[-2]["force"], rows[-1]["force"], final_force(work / f"N{n3}_reference")[0]
         ratio = n2 / n1

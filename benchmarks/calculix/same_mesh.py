@@ -36,7 +36,7 @@ import tempfile
 import time
 
 from calculix_deck import (DeckError, check_signorini, expected_difference, forces_of, length_unit, read_run,
-                           replay_residual, run_ccx, write_deck)
+                           region_materials, replay_residual, run_ccx, write_deck)
 
 
 def run_indentsim(exe, case, out, overrides):
@@ -89,8 +89,11 @@ def compare(case, args, work):
             nodes = len(scene["contact_sets"][k]) if scene["contact_sets"] else "-"
             print(f"  {k:>4} {scene['alphas'][k]:>12.5e} {nodes:>7} {forces[k]:>16.9e} {ccx_forces[k]:>14.7e} "
                   f"{differences[k - 1]:>13.2e}")
+    # The models from the surface down: "j2 on elastic" a J2 film on an elastic substrate.
+    materials = region_materials(scene["case"])
+    models = " on ".join(material["model"] for _, material in materials[1:] + materials[:1])
     return dict(case=str(case), kind=scene["kind"], shape=scene["case"]["punch"]["shape"],
-                model=scene["case"]["material"]["model"], dofs=dofs, increments=len(forces) - 1,
+                model=models, dofs=dofs, increments=len(forces) - 1,
                 peak=peak, largest=max(abs(d) for d in differences),
                 at_peak=(ccx_forces[k_peak] - peak) / peak, at_end=differences[-1], pull=pull,
                 penetration=penetration, residual=residual, allowed=expected_difference(scene), wall=wall,
@@ -123,11 +126,11 @@ def main():
         except DeckError as error:
             print(f"  not compared: {error}")
             failed = True
-    print(f"\n{'case':<44} {'scene':<28} {'DOFs':>6} {'incr':>4} {'peak P':>10} {'largest':>8} {'at peak':>8} "
+    print(f"\n{'case':<44} {'scene':<40} {'DOFs':>6} {'incr':>4} {'peak P':>10} {'largest':>8} {'at peak':>8} "
           f"{'at end':>8} {'residual':>8} {'allowed':>17} {'pull':>7} {'penetr.':>7} {'indentsim':>9} {'ccx':>7}")
     for r in rows:
         scene = f"{r['kind']}, {r['shape']}, {r['model']}"
-        print(f"{r['case']:<44} {scene:<28} {r['dofs']:>6} {r['increments']:>4} {r['peak']:>10.4e} "
+        print(f"{r['case']:<44} {scene:<40} {r['dofs']:>6} {r['increments']:>4} {r['peak']:>10.4e} "
               f"{r['largest']:>8.1e} {r['at_peak']:>8.1e} {r['at_end']:>8.1e} {r['residual']:>8.1e} "
               f"{r['allowed'][0]:>8.1e} {r['allowed'][1]:>8.1e} {r['pull']:>7.0e} "
               f"{r['penetration']:>7.0e} "

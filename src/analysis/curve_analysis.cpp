@@ -131,7 +131,7 @@ CurveAnalysis analyze_run_curve(const fs::path& path, const std::vector<std::str
   c.scene = lc.geometry.kind;
   c.punch = lc.punch;
   c.settings = lc.analysis;
-  c.specimen_nu = lc.material.nu;
+  c.specimen_nu = lc.surface_material().nu;  // the top layer's, under a coated surface (MODEL.md §14.1)
   c.depth = curve.depth;
   c.force = curve.force;
   c.time = curve.time;

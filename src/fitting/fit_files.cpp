@@ -114,6 +114,10 @@ std::pair<double, double> parse_bounds(const std::string& text, const std::strin
 
 MaterialParameter parameter_or_fail(const std::string& key, const std::string& where) {
   const auto p = parameter_of_key(key);
+  if (!p && key.rfind("layer.", 0) == 0)
+    throw InputError(where, printable(key, 60),
+                     "a layer's parameters cannot be freed yet (docs/MODEL.md §14.5 is not built): a coated case is "
+                     "fitted for its substrate's material.* keys, with its layers as given");
   if (!p) throw InputError(where, printable(key, 60), fmt::format("is not a parameter a fit can free (free: {})", fittable_keys()));
   return *p;
 }

@@ -107,6 +107,63 @@ std::int64_t graded_axis_count(double length, double fine_length, double spacing
   return a.fine_elements + a.graded_elements + 1;
 }
 
+std::vector<double> lay_interfaces(std::vector<double> d, const std::vector<double>& interfaces, int min_rows,
+                                   double ratio_limit) {
+  std::vector<char> fixed(d.size(), 0);
+  fixed.front() = fixed.back() = 1;
+  std::vector<std::size_t> lines{0};  // the interfaces' nodes, found after each insertion below
+  for (const double depth : interfaces) {
+    const auto above = std::lower_bound(d.begin(), d.end(), depth);
+    std::size_t j = static_cast<std::size_t>(above - d.begin());
+    if (j > 0 && (j == d.size() || depth - d[j - 1] < d[j] - depth)) --j;
+    const double local = std::max(j + 1 < d.size() ? d[j + 1] - d[j] : 0.0, j > 0 ? d[j] - d[j - 1] : 0.0);
+    if (std::abs(d[j] - depth) <= 1e-12 * local || !fixed[j]) {
+      d[j] = depth;  // on the node already, or the nearest free node moved onto it (within half an element)
+      fixed[j] = 1;
+    } else {
+      const auto at = static_cast<std::size_t>(std::upper_bound(d.begin(), d.end(), depth) - d.begin());
+      d.insert(d.begin() + static_cast<std::ptrdiff_t>(at), depth);
+      fixed.insert(fixed.begin() + static_cast<std::ptrdiff_t>(at), 1);
+    }
+  }
+  // Each layer's band (surface to first interface, then interface to interface) divided into at
+  // least min_rows rows.
+  std::vector<double> laid{0.0};
+  double top = 0.0;
+  for (const double bottom : interfaces) {
+    std::vector<double> inside;
+    for (const double x : d)
+      if (x > top && x < bottom) inside.push_back(x);
+    if (static_cast<int>(inside.size()) + 1 < min_rows) {
+      inside.clear();
+      for (int r = 1; r < min_rows; ++r) inside.push_back(top + (bottom - top) * r / min_rows);
+    }
+    laid.insert(laid.end(), inside.begin(), inside.end());
+    laid.push_back(bottom);
+    top = bottom;
+  }
+  for (const double x : d)
+    if (x > top) laid.push_back(x);
+  // The 2:1 rule: halve any element more than ratio_limit times a neighbour, until none is.
+  for (bool halved = true; halved;) {
+    halved = false;
+    std::vector<double> next{laid.front()};
+    for (std::size_t i = 0; i + 1 < laid.size(); ++i) {
+      const double size = laid[i + 1] - laid[i];
+      double neighbour = size;
+      if (i > 0) neighbour = std::min(neighbour, laid[i] - laid[i - 1]);
+      if (i + 2 < laid.size()) neighbour = std::min(neighbour, laid[i + 2] - laid[i + 1]);
+      if (size > ratio_limit * neighbour) {
+        next.push_back(laid[i] + 0.5 * size);
+        halved = true;
+      }
+      next.push_back(laid[i + 1]);
+    }
+    laid = std::move(next);
+  }
+  return laid;
+}
+
 double default_growth(int contact_nodes) {
   return std::clamp(1.0 + 2.5 / static_cast<double>(contact_nodes), 1.02, 1.5);
 }
@@ -128,6 +185,14 @@ static std::string with_implausible_values(const LoadCase& lc, std::string messa
   return message;
 }
 
+/// The depths of the mesh's node rows, surface (0) to base (ly): the graded axis, with the layers'
+/// interfaces laid into it (docs/MODEL.md §14.3).
+static std::vector<double> depth_axis(const LoadCase& lc, const MeshPlan& plan) {
+  std::vector<double> depth = graded_axis(lc.geometry.ly, plan.fine_depth, plan.fine_spacing, plan.growth);
+  if (lc.layers.empty()) return depth;
+  return lay_interfaces(std::move(depth), lc.interface_depths(), min_rows_per_layer, std::max(2.0, plan.growth));
+}
+
 MeshPlan plan_mesh(const LoadCase& lc, std::optional<double> measured_half_width) {
   const auto& m = lc.mesh;
   MeshPlan plan;
@@ -137,7 +202,7 @@ MeshPlan plan_mesh(const LoadCase& lc, std::optional<double> measured_half_width
   plan.contact_half_width_estimate =
       punch->rim() ? *punch->rim()
                    : m.contact_half_width.value_or(measured_half_width.value_or(
-                         punch->contact_estimate(lc.geometry.kind, lc.max_depth(), lc.geometry.ly, lc.material.nu)));
+                         punch->contact_estimate(lc.geometry.kind, lc.max_depth(), lc.geometry.ly, lc.surface_material().nu)));
   const double a_star = plan.contact_half_width_estimate;
   plan.fine_spacing = a_star / static_cast<double>(m.contact_nodes);
   // The fine zone holds the contact with a margin for the estimate, and the layer below it
@@ -186,6 +251,9 @@ MeshPlan plan_mesh(const LoadCase& lc, std::optional<double> measured_half_width
   } catch (const std::length_error&) {
     throw InputError(lc.source, size_key, "gives a mesh with too many elements");
   }
+  // The interfaces' lines and the layers' rows (a 1-D axis: cheap once its graded count is sane).
+  if (!lc.layers.empty() && plan.unknowns() <= lc.mesh.max_unknowns)
+    plan.nodes_y = static_cast<std::int64_t>(depth_axis(lc, plan).size());
 
   if (plan.unknowns() > lc.mesh.max_unknowns)
     throw InputError(lc.source, size_key,
@@ -210,14 +278,29 @@ MeshPlan plan_mesh(const LoadCase& lc, std::optional<double> measured_half_width
 
 Mesh Mesh::from_plan(const LoadCase& lc, const MeshPlan& plan) {
   std::vector<double> x = graded_axis(lc.geometry.lx, plan.fine_width, plan.fine_spacing, plan.growth);
-  std::vector<double> depth = graded_axis(lc.geometry.ly, plan.fine_depth, plan.fine_spacing, plan.growth);
+  const std::vector<double> depth = depth_axis(lc, plan);
   std::vector<double> y(depth.size());
   for (std::size_t k = 0; k < depth.size(); ++k) y[k] = -depth[depth.size() - 1 - k];
   y.back() = 0.0;
   y.front() = -lc.geometry.ly;
   Mesh mesh(std::move(x), std::move(y));
   mesh.set_scene(lc.geometry.kind);
+  if (!lc.layers.empty()) {
+    std::vector<int> row_region(static_cast<std::size_t>(mesh.elements_y()));
+    for (int ej = 0; ej < mesh.elements_y(); ++ej)
+      row_region[static_cast<std::size_t>(ej)] =
+          static_cast<int>(lc.region_at_depth(-0.5 * (mesh.y(ej) + mesh.y(ej + 1))));
+    mesh.set_row_regions(std::move(row_region), static_cast<int>(lc.regions()));
+  }
   return mesh;
+}
+
+void Mesh::set_row_regions(std::vector<int> row_region, int regions) {
+  if (static_cast<int>(row_region.size()) != elements_y() || regions < 1 ||
+      std::any_of(row_region.begin(), row_region.end(), [&](int r) { return r < 0 || r >= regions; }))
+    throw std::invalid_argument("set_row_regions: one region in [0, regions) per element row");
+  row_region_ = std::move(row_region);
+  regions_ = regions;
 }
 
 Mesh::Mesh(std::vector<double> x, std::vector<double> y) : x_(std::move(x)), y_(std::move(y)) {

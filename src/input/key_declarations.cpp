@@ -787,6 +787,18 @@ std::string to_toml(const LoadCase& lc) {
     if (key.derived) t += fmt::format("# {} = {}  ({}: derived, shown for reference)\n", key.name, *value, key.unit);
     else t += fmt::format("{} = {}\n", key.name, *value);
   }
+  // The layers from the surface down, each material written by the [material] declarations.
+  for (const LayerInput& layer : lc.layers) {
+    t += fmt::format("\n[[layer]]\nthickness = {}\n[layer.material]\n", toml_number(layer.thickness));
+    const LoadCase scratch = with_material(lc, layer.material);
+    for (const auto& key : key_declarations()) {
+      if (std::string(key.section) != "material") continue;
+      const std::optional<std::string> value = key.write(scratch);
+      if (!value) continue;
+      if (key.derived) t += fmt::format("# {} = {}  ({}: derived, shown for reference)\n", key.name, *value, key.unit);
+      else t += fmt::format("{} = {}\n", key.name, *value);
+    }
+  }
   return t;
 }
 
@@ -808,7 +820,20 @@ std::string keys_markdown() {
 std::vector<KeyDescription> describe_keys() {
   const LoadCase defaults;
   std::vector<KeyDescription> out;
-  for (const auto& key : key_declarations()) {
+  const auto& declarations = key_declarations();
+  for (std::size_t i = 0; i < declarations.size(); ++i) {
+    const auto& key = declarations[i];
+    // The [[layer]] tables follow [material], whose keys each layer's material takes.
+    if (i > 0 && std::string(declarations[i - 1].section) == "material" && std::string(key.section) != "material") {
+      out.push_back({"layer.thickness", "number", "required", "> 0, the layers' sum < geometry.ly", "m",
+                     "[[layer]], one per layer from the surface down (docs/MODEL.md §14): the layer's thickness; the "
+                     "layers lie on the substrate [material] describes",
+                     true, false});
+      out.push_back({"layer.material.KEY", "table", "required", "every key of [material], checked as there", "",
+                     "[layer.material]: the layer's material, perfectly bonded to its neighbours; addressed as "
+                     "layer.K.material.KEY (K from 1 at the surface) by --set and sweeps (not yet freed by a fit)",
+                     true, false});
+    }
     KeyDescription d;
     d.key = std::string(key.section) + "." + key.name;
     d.type = key.type;
@@ -869,6 +894,15 @@ std::string first_physics_difference(const LoadCase& a, const LoadCase& b) {
       continue;
     if (key.derived) continue;
     if (key.write(a) != key.write(b)) return section + "." + key.name;
+  }
+  if (a.layers.size() != b.layers.size()) return "layer";
+  for (std::size_t k = 0; k < a.layers.size(); ++k) {
+    const std::string name = fmt::format("layer[{}]", k + 1);
+    if (toml_number(a.layers[k].thickness) != toml_number(b.layers[k].thickness)) return name + ".thickness";
+    const LoadCase la = with_material(a, a.layers[k].material), lb = with_material(b, b.layers[k].material);
+    for (const auto& key : key_declarations())
+      if (std::string(key.section) == "material" && !key.derived && key.write(la) != key.write(lb))
+        return name + ".material." + key.name;
   }
   return "";
 }

@@ -139,6 +139,15 @@ inline std::vector<std::string> key_names(const std::vector<KeyDeclaration>& key
   return names;
 }
 
+/// A copy of `lc` with `material` as its only material: how a layer's material is read, written,
+/// checked and compared by the [material] declarations.
+inline LoadCase with_material(const LoadCase& lc, const MaterialInput& material) {
+  LoadCase scratch = lc;
+  scratch.material = material;
+  scratch.layers.clear();
+  return scratch;
+}
+
 inline std::string join(const std::vector<std::string>& words) {
   std::string out;
   for (const auto& w : words) out += (out.empty() ? "" : ", ") + w;

@@ -49,6 +49,38 @@ double LoadCase::max_depth() const {
   return load.largest_target();
 }
 
+bool LoadCase::any_inelastic() const {
+  for (std::size_t r = 0; r < regions(); ++r)
+    if (region_material(r).model != MaterialModel::elastic) return true;
+  return false;
+}
+
+bool LoadCase::any_rate(RateLaw rule) const {
+  for (std::size_t r = 0; r < regions(); ++r)
+    if (region_material(r).rate == rule) return true;
+  return false;
+}
+
+bool LoadCase::any_rate_dependent() const {
+  for (std::size_t r = 0; r < regions(); ++r)
+    if (region_material(r).rate != RateLaw::none) return true;
+  return false;
+}
+
+std::vector<double> LoadCase::interface_depths() const {
+  std::vector<double> depths;
+  double depth = 0.0;
+  for (const LayerInput& layer : layers) depths.push_back(depth += layer.thickness);
+  return depths;
+}
+
+std::size_t LoadCase::region_at_depth(double depth) const {
+  double bottom = 0.0;
+  for (std::size_t k = 0; k < layers.size(); ++k)
+    if (depth <= (bottom += layers[k].thickness)) return k + 1;
+  return 0;
+}
+
 int LoadInput::total_increments() const {
   if (segment_increments.empty()) return increments;
   int total = 0;
@@ -89,11 +121,25 @@ void apply_override(toml::table& root, const std::string& text, const std::strin
   const auto is_name = [](const std::string& s) {
     return !s.empty() && std::all_of(s.begin(), s.end(), [](unsigned char c) { return std::isalnum(c) || c == '_'; });
   };
-  const auto dot = path.find('.');
-  if (dot == std::string::npos || !is_name(path.substr(0, dot)) || !is_name(path.substr(dot + 1)))
+  // A layer's key: layer.K.thickness or layer.K.material.KEY (K from 1 at the surface).
+  std::vector<std::string> parts;
+  for (std::size_t from = 0;;) {
+    const auto next = path.find('.', from);
+    parts.push_back(path.substr(from, next == std::string::npos ? std::string::npos : next - from));
+    if (next == std::string::npos) break;
+    from = next + 1;
+  }
+  const bool layer_key = parts.size() >= 3 && parts[0] == "layer";
+  if (layer_key) {
+    const bool well_formed =
+        !parts[1].empty() && std::all_of(parts[1].begin(), parts[1].end(), [](unsigned char c) { return std::isdigit(c); }) &&
+        ((parts.size() == 3 && parts[2] == "thickness") ||
+         (parts.size() == 4 && parts[2] == "material" && is_name(parts[3])));
+    if (!well_formed)
+      fail(printable(path, 80), "a layer's key is layer.K.thickness or layer.K.material.KEY (K from 1 at the surface)");
+  } else if (parts.size() != 2 || !is_name(parts[0]) || !is_name(parts[1])) {
     fail(printable(path, 80), "expects section.key=value (one section, one key: letters, digits, _)");
-  const std::string section = path.substr(0, dot);
-  const std::string key = path.substr(dot + 1);
+  }
 
   toml::table parsed;
   bool is_toml_value = true;
@@ -113,9 +159,29 @@ void apply_override(toml::table& root, const std::string& text, const std::strin
                              "zero beyond 2.2e-308)",
                              printable(value_text, 60)));
   }
-  if (!root.contains(section)) root.insert(section, toml::table{});
-  toml::table* table = root[section].as_table();
-  if (!table) throw InputError(source, section, "must be a table");
+  toml::table* table = nullptr;
+  std::string key;
+  if (layer_key) {
+    toml::array* layers = root["layer"].as_array();
+    const std::size_t count = layers && layers->is_array_of_tables() ? layers->size() : 0;
+    const std::size_t k = parts[1].size() > 6 ? 0 : std::stoul(parts[1]);
+    if (k < 1 || k > count)
+      fail(path, fmt::format("the case has {} layer{} ([[layer]] tables): there is no layer {}", count,
+                             count == 1 ? "" : "s", printable(parts[1], 20)));
+    table = layers->get(k - 1)->as_table();
+    if (parts.size() == 4) {
+      if (!table->contains("material")) table->insert("material", toml::table{});
+      table = (*table)["material"].as_table();
+      if (!table) throw InputError(source, fmt::format("layer[{}].material", k), "must be a table");
+    }
+    key = parts.back();
+  } else {
+    const std::string& section = parts[0];
+    key = parts[1];
+    if (!root.contains(section)) root.insert(section, toml::table{});
+    table = root[section].as_table();
+    if (!table) throw InputError(source, section, "must be a table");
+  }
   if (is_toml_value) {
     if (parsed.size() != 1 || !parsed.contains("value"))
       fail(path, fmt::format("\"{}\" is more than one value: one --set sets one key", printable(value_text, 60)));
@@ -261,13 +327,9 @@ static void check_rate_keys(const Reader& r, const LoadCase& lc) {
                "surface and no hardening curve (for creep beside a yield surface use \"perzyna\")");
 }
 
-LoadCase from_table(const toml::table& root, const std::string& source, const std::filesystem::path& base_dir) {
-  Reader r(root, source, base_dir);
-  const auto& keys = key_declarations();
-  r.check_structure(keys);
-  LoadCase lc;
-  lc.source = source;
-  for (const auto& key : keys) key.read(r, lc);
+/// What the [material] keys say beyond each key's own reading: the keys that belong to other
+/// keys' choices, and e0 from a yield stress.  For the substrate's [material] and each layer's.
+static void read_material_rules(const Reader& r, LoadCase& lc) {
   // Small strain cannot tell the Cauchy from the Kirchhoff stress (docs/MODEL.md §12.2).
   if (lc.geometry.strain == StrainChoice::small && r.find("material", "elastic_stress"))
     r.fail("material.elastic_stress", "applies to finite strain only (geometry.strain = \"finite\" or \"auto\"); "
@@ -288,6 +350,76 @@ LoadCase from_table(const toml::table& root, const std::string& source, const st
                          "material.E = {} Pa, but e0 must lie in [{:g}, 1): are both in pascals (300 MPa is 300e6)?",
                          *lc.material.yield_stress, e0, lc.material.E, min_elastic_limit_strain));
   }
+  check_hardening_keys(r, lc);
+  check_rate_keys(r, lc);
+}
+
+/// The [[layer]] tables (docs/MODEL.md §14.2), from the surface down: each a thickness and a
+/// material read by the [material] declarations on a scratch case, so that a layer accepts and
+/// refuses exactly what [material] does; messages name layer[k] (k from 1) and the key.
+static std::vector<LayerInput> read_layers(const toml::node& node, const LoadCase& lc,
+                                           const std::filesystem::path& base_dir) {
+  const auto fail = [&](const std::string& key, const std::string& problem) {
+    throw InputError(lc.source, key, problem);
+  };
+  const toml::array* layers = node.as_array();
+  if (!layers || !layers->is_array_of_tables())
+    fail("layer", "must be an array of tables, one [[layer]] per layer from the surface down");
+  std::vector<KeyDeclaration> material_keys;
+  for (const KeyDeclaration& key : key_declarations())
+    if (std::string(key.section) == "material") material_keys.push_back(key);
+  std::vector<LayerInput> read;
+  for (std::size_t k = 0; k < layers->size(); ++k) {
+    const std::string name = fmt::format("layer[{}]", k + 1);
+    const toml::table& table = *layers->get(k)->as_table();
+    for (const auto& [key, value] : table)
+      if (key.str() != "thickness" && key.str() != "material")
+        fail(name + "." + std::string(key.str()), "unknown key (known keys of [[layer]]: thickness, material)");
+    LayerInput layer;
+    const toml::node* thickness = table.get("thickness");
+    if (!thickness) fail(name + ".thickness", "missing key (each layer needs its thickness [m])");
+    if (auto v = thickness->value_exact<double>()) layer.thickness = *v;
+    else if (auto i = thickness->value_exact<int64_t>()) layer.thickness = static_cast<double>(*i);
+    else fail(name + ".thickness", fmt::format("expected a number, got {}", Reader::type_name(*thickness)));
+    if (!(std::isfinite(layer.thickness) && layer.thickness > 0.0))
+      fail(name + ".thickness", fmt::format("must be a finite length > 0 (got {})", layer.thickness));
+    const toml::node* material = table.get("material");
+    if (!material) fail(name + ".material", "missing table ([layer.material] with the layer's material keys)");
+    if (!material->is_table()) fail(name + ".material", "must be a table ([layer.material])");
+    toml::table scratch_root;
+    scratch_root.insert("material", *material->as_table());
+    LoadCase scratch = with_material(lc, MaterialInput{});
+    try {
+      const Reader r(scratch_root, lc.source, base_dir);
+      r.check_structure(material_keys);
+      for (const KeyDeclaration& key : material_keys) key.read(r, scratch);
+      read_material_rules(r, scratch);
+    } catch (const InputError& e) {
+      throw InputError(e.file(), name + "." + e.key(), e.problem());
+    }
+    layer.material = scratch.material;
+    read.push_back(std::move(layer));
+  }
+  return read;
+}
+
+LoadCase from_table(const toml::table& given, const std::string& source, const std::filesystem::path& base_dir) {
+  // The layers are an array of tables, which the key table's sections are not: read apart.
+  toml::table root = given;
+  std::optional<toml::array> layer_tables;
+  if (const toml::node* node = root.get("layer")) {
+    if (const toml::array* array = node->as_array()) layer_tables = *array;
+    else throw InputError(source, "layer", "must be an array of tables, one [[layer]] per layer from the surface down");
+    root.erase("layer");
+  }
+  Reader r(root, source, base_dir);
+  const auto& keys = key_declarations();
+  r.check_structure(keys);
+  LoadCase lc;
+  lc.source = source;
+  for (const auto& key : keys) key.read(r, lc);
+  read_material_rules(r, lc);
+  if (layer_tables) lc.layers = read_layers(*layer_tables, lc, base_dir);
   // Without output.dir, out/ and the case's name: two cases run from one folder keep their own
   // runs (a sweep names its folder the same way).
   if (!r.find("output", "dir")) {
@@ -295,8 +427,6 @@ LoadCase from_table(const toml::table& root, const std::string& source, const st
     if (file.extension() == ".toml" && !file.stem().empty()) lc.output.dir = "out/" + file.stem().string();
   }
   check_punch_keys(r, lc);
-  check_hardening_keys(r, lc);
-  check_rate_keys(r, lc);
   // A cone has no length scale: its contact edge sweeps the whole contact zone node by node, and
   // under a plastic material the edge carries the full hardness, so the node-by-node engagement is
   // a first-order error.  30 elements hold Kick's law P/h^2 = const to 0.34% (docs/verification.md, "Kick's law on a cone").

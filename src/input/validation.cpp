@@ -186,6 +186,48 @@ static void validate_rate(const LoadCase& lc) {
                              "\"norton\" every stressed element creeps: use \"auto\" or \"full\"");
 }
 
+/// The layers (docs/MODEL.md §14.2): each thickness a length > 0, the stack thinner than the
+/// specimen, and each layer's material valid as [material] is (checked by the same functions on a
+/// scratch case whose material is the layer's; its messages name layer[k]).
+static void validate_layers(const LoadCase& lc) {
+  double depth = 0.0;
+  for (std::size_t k = 0; k < lc.layers.size(); ++k) {
+    const std::string name = fmt::format("layer[{}]", k + 1);
+    const LayerInput& layer = lc.layers[k];
+    if (!(std::isfinite(layer.thickness) && layer.thickness > 0.0))
+      throw InputError(lc.source, name + ".thickness",
+                       fmt::format("must be a finite length > 0 (got {})", layer.thickness));
+    depth += layer.thickness;
+    if (!(depth < lc.geometry.ly))
+      throw InputError(lc.source, name + ".thickness",
+                       fmt::format("the layers reach {} m below the surface, not less than the specimen's depth "
+                                   "(geometry.ly = {} m): the substrate must lie below them",
+                                   depth, lc.geometry.ly));
+    const LoadCase scratch = with_material(lc, layer.material);
+    try {
+      check_declared_ranges(scratch, "material");
+      validate_hardening(scratch);
+      validate_rate(scratch);
+    } catch (const InputError& e) {
+      // The layer's own keys are named as the layer's; a key of another section (the far field
+      // a creeping layer cannot have condensed) keeps its name.
+      const bool own = e.key().rfind("material", 0) == 0;
+      throw InputError(e.file(), own ? name + "." + e.key() : e.key(),
+                       own ? e.problem() : fmt::format("{} (in {})", e.problem(), name));
+    }
+  }
+  // Ilyushin's deformation theory makes the whole body's state a function of the load and its
+  // unloading theorem unloads the whole body from the path's deepest point (docs/MODEL.md §5);
+  // a region that creeps at a held load has no such state (measured: an Ilyushin film on a Norton
+  // substrate finds no first increment).
+  if (lc.any_rate_dependent())
+    for (std::size_t r = 0; r < lc.regions(); ++r)
+      if (lc.region_material(r).model == MaterialModel::ilyushin)
+        throw InputError(lc.source, (r == 0 ? std::string() : fmt::format("layer[{}].", r)) + "material.model",
+                         "\"ilyushin\" (deformation theory: the state of the whole specimen follows the load) cannot "
+                         "share a specimen with a region whose material.rate flows in time: use \"j2\"");
+}
+
 void validate_punch_shape(const LoadCase& lc) {
   const auto& punch = lc.punch;
   if ((punch.shape == PunchShapeKind::sphere || punch.shape == PunchShapeKind::flat) && !(punch.radius > 0.0))
@@ -278,6 +320,7 @@ void validate(const LoadCase& lc) {
 
   validate_hardening(lc);
   validate_rate(lc);
+  validate_layers(lc);
 
   const auto& path = lc.load.path;
   if (path.size() < 2) fail("load.path", "needs at least two waypoints, starting at 0");

@@ -23,11 +23,15 @@ NodalStresses average_to_nodes(const Mesh& mesh, const BulkModel& bulk) {
   const double lo = 0.5 - std::sqrt(3.0) / 2.0, hi = 0.5 + std::sqrt(3.0) / 2.0;
   const double vertex_s[4] = {lo, lo, hi, hi}, vertex_t[4] = {lo, hi, lo, hi};
   const int point_s[4] = {0, 0, 1, 1}, point_t[4] = {0, 1, 0, 1};
+  // Averaged within one material region (docs/MODEL.md §14.1): a node on an interface takes the
+  // side of the layer above it, as an average across would smear the jump of sigma_11 and sigma_33.
+  const auto node_region = [&](int row) { return mesh.region(row < mesh.top_row() ? row : row - 1); };
   for (int ei = 0; ei < mesh.elements_x(); ++ei)
     for (int ej = 0; ej < mesh.elements_y(); ++ej) {
       const auto states = bulk.gauss_point_states(ei, ej);
       const auto nodes = mesh.element_nodes(ei, ej);
       for (int q = 0; q < 4; ++q) {
+        if (mesh.region(ej) != node_region(q % 2 == 0 ? ej : ej + 1)) continue;
         std::array<double, 5> v{0, 0, 0, 0, 0};
         for (int g = 0; g < 4; ++g) {
           const double w = (point_s[g] ? vertex_s[q] : 1 - vertex_s[q]) * (point_t[g] ? vertex_t[q] : 1 - vertex_t[q]);
@@ -219,6 +223,10 @@ std::string vtu_document(const FieldFrame& frame, const Mesh& mesh, const double
     data_array<double>(out, cell_names[c].c_str(), 1, cells, [&](std::size_t e, int) { return cell[e][c]; });
   data_array<std::int32_t>(out, "plastic", 1, cells, [&](std::size_t e, int) { return cell[e][6] > 0 ? 1 : 0; });
   data_array<std::int32_t>(out, "plastic_points", 1, cells, [&](std::size_t e, int) { return cell[e][6]; });
+  // The material region (0 the substrate, k layer k from the surface; docs/MODEL.md §14.1).
+  data_array<std::int32_t>(out, "region", 1, cells, [&](std::size_t e, int) {
+    return mesh.region(static_cast<int>(e % static_cast<std::size_t>(mesh.elements_y())));
+  });
   out += "      </CellData>\n      <Points>\n";
   data_array<double>(out, "coordinates", 3, nodes, [&](std::size_t n, int c) {
     const int i = static_cast<int>(n) / mesh.nodes_y(), j = static_cast<int>(n) % mesh.nodes_y();

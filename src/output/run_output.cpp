@@ -41,9 +41,54 @@ void add_flow_rule(const MaterialInput& m, nlohmann::ordered_json& law) {
   law["rate_exponent"] = m.rate_exponent.value_or(0.0);
 }
 
-/// What summary.json says of the run besides its results: who wrote it, the units, the material.
+/// One material as summary.json gives it: its elastic constants, its yield surface and hardening
+/// curve (Norton's creep has neither) and its flow rule.
+nlohmann::ordered_json material_fields(const MaterialInput& m) {
+  nlohmann::ordered_json material;
+  if (m.rate == RateLaw::norton) {  // no yield surface, no hardening curve
+    material = {{"E", m.E}, {"nu", m.nu}};
+    add_flow_rule(m, material);
+    return material;
+  }
+  if (!m.flow_stress_law()) {
+    material = {{"E", m.E},
+                {"nu", m.nu},
+                {"e0", m.e0},
+                {"yield_stress", m.yield_stress.value_or(yield_stress_of_e0(m.e0, m.E, m.nu))},
+                {"hardening", to_string(m.hardening)},
+                {"kappa", m.kappa},
+                {"n", m.n}};
+    add_flow_rule(m, material);
+    return material;
+  }
+  // A tensile test's flow curve: its initial yield stress and the law's own parameters.
+  const double yield = make_hardening_curve(m)->initial_yield();
+  material = {{"E", m.E},
+              {"nu", m.nu},
+              {"e0", e0_of_yield_stress(yield, m.E, m.nu)},
+              {"yield_stress", yield},
+              {"hardening", to_string(m.hardening)}};
+  switch (m.hardening) {
+    case HardeningLaw::power_law: material["n"] = m.n; break;
+    case HardeningLaw::ludwik: material["K"] = m.K.value_or(0.0), material["n"] = m.n; break;
+    case HardeningLaw::swift:
+      material["K"] = m.K.value_or(0.0), material["prestrain"] = m.prestrain.value_or(0.0), material["n"] = m.n;
+      break;
+    case HardeningLaw::voce: material["Q"] = m.Q.value_or(0.0), material["b"] = m.b.value_or(0.0); break;
+    case HardeningLaw::table:
+      material["points"] = m.hardening_points;
+      material["table_extension"] = to_string(m.table_extension);
+      break;
+    case HardeningLaw::linear:
+    case HardeningLaw::power: break;
+  }
+  add_flow_rule(m, material);
+  return material;
+}
+
+/// What summary.json says of the run besides its results: who wrote it, the units, the material
+/// (the substrate's, with the layers above it from the surface down: docs/MODEL.md §14.1).
 nlohmann::ordered_json run_fields(const LoadCase& lc) {
-  const auto& m = lc.material;
   const bool axisymmetric = lc.geometry.kind == SceneKind::axisymmetric;
   nlohmann::ordered_json j;
   j["indentsim"] = version_line();
@@ -52,44 +97,20 @@ nlohmann::ordered_json run_fields(const LoadCase& lc) {
                 {"force", axisymmetric ? "N (the whole specimen)" : "N/m (per unit thickness, both halves)"},
                 {"stiffness", axisymmetric ? "N/m" : "N/m per m"},
                 {"stress", "Pa"}};
-  j["model"] = to_string(m.model);
-  if (m.rate == RateLaw::norton) {  // no yield surface, no hardening curve
-    j["material"] = {{"E", m.E}, {"nu", m.nu}};
-    add_flow_rule(m, j["material"]);
-    return j;
+  j["model"] = to_string(lc.material.model);
+  j["material"] = material_fields(lc.material);
+  if (!lc.layers.empty()) {
+    auto& layers = j["layers"] = nlohmann::ordered_json::array();
+    double top = 0.0;
+    for (const LayerInput& layer : lc.layers) {
+      layers.push_back({{"thickness", layer.thickness},
+                        {"top_depth", top},
+                        {"bottom_depth", top + layer.thickness},
+                        {"model", to_string(layer.material.model)},
+                        {"material", material_fields(layer.material)}});
+      top += layer.thickness;
+    }
   }
-  if (!m.flow_stress_law()) {
-    j["material"] = {{"E", m.E},
-                     {"nu", m.nu},
-                     {"e0", m.e0},
-                     {"yield_stress", m.yield_stress.value_or(yield_stress_of_e0(m.e0, m.E, m.nu))},
-                     {"hardening", to_string(m.hardening)},
-                     {"kappa", m.kappa},
-                     {"n", m.n}};
-    add_flow_rule(m, j["material"]);
-    return j;
-  }
-  // A tensile test's flow curve: its initial yield stress and the law's own parameters.
-  const double yield = make_hardening_curve(m)->initial_yield();
-  j["material"] = {{"E", m.E},
-                   {"nu", m.nu},
-                   {"e0", e0_of_yield_stress(yield, m.E, m.nu)},
-                   {"yield_stress", yield},
-                   {"hardening", to_string(m.hardening)}};
-  auto& law = j["material"];
-  switch (m.hardening) {
-    case HardeningLaw::power_law: law["n"] = m.n; break;
-    case HardeningLaw::ludwik: law["K"] = m.K.value_or(0.0), law["n"] = m.n; break;
-    case HardeningLaw::swift: law["K"] = m.K.value_or(0.0), law["prestrain"] = m.prestrain.value_or(0.0), law["n"] = m.n; break;
-    case HardeningLaw::voce: law["Q"] = m.Q.value_or(0.0), law["b"] = m.b.value_or(0.0); break;
-    case HardeningLaw::table:
-      law["points"] = m.hardening_points;
-      law["table_extension"] = to_string(m.table_extension);
-      break;
-    case HardeningLaw::linear:
-    case HardeningLaw::power: break;
-  }
-  add_flow_rule(m, law);
   return j;
 }
 
@@ -158,7 +179,7 @@ LoadHistorySummary::LoadHistorySummary(const LoadCase* load_case) {
   context_.punch = punch_.get();
   context_.shape = load_case->punch.shape;
   context_.settings = load_case->analysis;
-  context_.specimen_nu = load_case->material.nu;
+  context_.specimen_nu = load_case->surface_material().nu;  // the top layer's, under a coated surface (MODEL.md §14.1)
   if (load_case->load.control == LoadControlKind::force) targets_ = plan_increments(load_case->load);
 }
 

@@ -74,7 +74,9 @@ const IncrementRecord* deepest_row(const std::vector<IncrementRecord>& curve, do
 }  // namespace
 
 bool depends_on_the_increments(const LoadCase& load_case) {
-  return load_case.material.model == MaterialModel::j2 || load_case.contact.friction > 0.0;
+  for (std::size_t r = 0; r < load_case.regions(); ++r)
+    if (load_case.region_material(r).model == MaterialModel::j2) return true;
+  return load_case.contact.friction > 0.0;
 }
 
 LoadCase with_halved_increments(const LoadCase& load_case) {
@@ -175,7 +177,7 @@ const IncrementRecord* DiscretizationErrorEstimate::companion_row(std::size_t co
 double force_order_assumed(const LoadCase& load_case) {
   constexpr double plastic_order = 1.5;
   const double shape_order = make_punch(load_case.punch)->force_convergence_order();
-  return load_case.material.model == MaterialModel::elastic ? shape_order : std::min(shape_order, plastic_order);
+  return load_case.any_inelastic() ? std::min(shape_order, plastic_order) : shape_order;
 }
 
 std::optional<DiscretizationErrorEstimate::AtIncrement> DiscretizationErrorEstimate::at(

@@ -51,7 +51,7 @@ LoadCase coarse_pilot_case(const LoadCase& lc, double depth) {
   pilot.load.times.clear();
   // A rate-dependent law flows over time (docs/MODEL.md §13.3): the pilot presses in the time the
   // case takes to its largest waypoint.
-  if (lc.material.rate != RateLaw::none && !lc.load.times.empty()) {
+  if (lc.any_rate_dependent() && !lc.load.times.empty()) {
     const auto& path = lc.load.path;
     const auto peak = static_cast<std::size_t>(std::max_element(path.begin(), path.end()) - path.begin());
     pilot.load.times = {0.0, lc.load.times[peak]};
@@ -78,7 +78,7 @@ PilotResult pilot_run(const LoadCase& lc) {
     PlasticZoneGrowth growth;
     sim.run([&](const IncrementRecord& r) {
       widest = std::max(widest, r.half_width);
-      if (r.step == 0) return;
+      if (r.step == 0 || !sim.plasticity()) return;  // an elastic coated specimen's pilot measures its contact
       const Mesh& mesh = sim.mesh();
       PlasticExtent zone;
       for (int ei = 0; ei < mesh.elements_x(); ++ei)
@@ -183,7 +183,7 @@ LoadCase with_depth_estimate(LoadCase lc) {
     depth = next;
     if (settled) break;
   }
-  if (lc.material.rate != RateLaw::none && !lc.load.times.empty()) depth = creep_pilot_depth(lc, depth);
+  if (lc.any_rate_dependent() && !lc.load.times.empty()) depth = creep_pilot_depth(lc, depth);
   lc.load.depth_estimate = depth;
   validate(lc);  // what depends on the deepest depth (a tip's area function over it) is checked now
   return lc;
@@ -211,8 +211,9 @@ LinearSolverKind choose_linear_solver(LinearSolverChoice choice, int unknowns) {
 NearField choose_near_field(const LoadCase& lc, const Mesh& mesh, const MeshPlan& plan, bool plastic,
                             const std::optional<PlasticExtent>& plastic_zone) {
   NearField near;
-  // Norton's creep has no yield surface: every stressed element flows, and no far field is elastic.
-  if (lc.solver.far_field == FarFieldChoice::full || lc.material.rate == RateLaw::norton) return near;
+  // Norton's creep has no yield surface: every stressed element flows, and no far field is elastic
+  // (a creeping layer reaches the far field too: docs/MODEL.md §14.1).
+  if (lc.solver.far_field == FarFieldChoice::full || lc.any_rate(RateLaw::norton)) return near;
   const double a = plan.contact_half_width_estimate, h = plan.fine_spacing;
   const double contact_width = 1.3 * a + 2.0 * h;
   while (near.contact_nodes < mesh.nodes_x() && mesh.x(near.contact_nodes) <= contact_width) ++near.contact_nodes;
@@ -243,18 +244,22 @@ ElementKind choose_element(const LoadCase& lc) {
     case ElementChoice::bbar: return ElementKind::bbar;
     case ElementChoice::automatic: break;
   }
-  const auto& m = lc.material;
-  const bool near_incompressible = m.nu >= 0.45;
-  const bool plastic = m.model != MaterialModel::elastic;
-  // A tensile test's flow curve (power_law, ludwik, swift, voce, table) flattens as eps_p grows
-  // (saturates, or is flat beyond a table): the flow under an indenter is nearly perfectly plastic.
-  const bool near_perfect_plasticity =
-      plastic && (m.flow_stress_law() || (m.hardening == HardeningLaw::linear ? m.kappa > 0.95 : m.n < 0.1));
-  const bool sharp_plastic_indentation = plastic && sharp_tip(lc.punch.shape);
-  // Norton's creep flows isochorically everywhere, and in a hold it is all the specimen does.
-  const bool creeping = m.rate == RateLaw::norton;
-  return near_incompressible || near_perfect_plasticity || sharp_plastic_indentation || creeping ? ElementKind::bbar
-                                                                                       : ElementKind::q1;
+  // One element kind per mesh: B-bar when any region needs it (docs/MODEL.md §14.1).
+  const auto needs_bbar = [&](const MaterialInput& m) {
+    const bool near_incompressible = m.nu >= 0.45;
+    const bool plastic = m.model != MaterialModel::elastic;
+    // A tensile test's flow curve (power_law, ludwik, swift, voce, table) flattens as eps_p grows
+    // (saturates, or is flat beyond a table): the flow under an indenter is nearly perfectly plastic.
+    const bool near_perfect_plasticity =
+        plastic && (m.flow_stress_law() || (m.hardening == HardeningLaw::linear ? m.kappa > 0.95 : m.n < 0.1));
+    const bool sharp_plastic_indentation = plastic && sharp_tip(lc.punch.shape);
+    // Norton's creep flows isochorically everywhere, and in a hold it is all the specimen does.
+    const bool creeping = m.rate == RateLaw::norton;
+    return near_incompressible || near_perfect_plasticity || sharp_plastic_indentation || creeping;
+  };
+  for (std::size_t r = 0; r < lc.regions(); ++r)
+    if (needs_bbar(lc.region_material(r))) return ElementKind::bbar;
+  return ElementKind::q1;
 }
 
 /// The keys that set a contact's size, for a warning that it is too large: a sphere's and a flat
@@ -279,7 +284,7 @@ std::vector<std::string> plausibility_warnings(const LoadCase& lc, const MeshPla
   // and depths small against the punch's size.
   if (auto slope = make_punch(lc.punch)->slope_warning(lc.max_depth())) warnings.push_back(*slope);
   // Time reaches only a rate-dependent flow rule (docs/MODEL.md §13.3).
-  if (!lc.load.times.empty() && lc.material.rate == RateLaw::none)
+  if (!lc.load.times.empty() && !lc.any_rate_dependent())
     warnings.push_back("load.times only labels the increments: the material of this case does not depend on the rate "
                        "of loading (material.rate = \"none\"), so the loading rate changes nothing and a hold repeats "
                        "its state (no creep)");
@@ -307,7 +312,9 @@ RunPlan plan_run(const LoadCase& load_case, std::optional<double> planned_contac
       plan.plastic_zone.depths.push_back(z[0]);
       plan.plastic_zone.extents.push_back(PlasticExtent{z[1], z[2]});
     }
-  } else if (load_case.material.model != MaterialModel::elastic && !load_case.mesh.contact_half_width) {
+  } else if ((load_case.any_inelastic() || !load_case.layers.empty()) && !load_case.mesh.contact_half_width) {
+    // A plastic specimen's contact, and a coated one's (a thin film's substrate is felt before the
+    // mesh is planned, docs/MODEL.md §14.1), are measured by a coarse pilot run.
     LoadCase pinned = load_case;  // the pilot drops mesh.target_error: it runs the kinematics chosen with it
     pin_kinematics(pinned);
     const PilotResult pilot = pilot_run(pinned);
@@ -345,12 +352,12 @@ constexpr double default_accuracy = 2e-3;
 // of the contact radius (Sneddon's, the mesh plan's first guess), which the case alone decides.
 double mean_strain_at_max_depth(const LoadCase& lc) {
   const double a =
-      make_punch(lc.punch)->contact_estimate(lc.geometry.kind, lc.max_depth(), lc.geometry.ly, lc.material.nu);
+      make_punch(lc.punch)->contact_estimate(lc.geometry.kind, lc.max_depth(), lc.geometry.ly, lc.surface_material().nu);
   return lc.max_depth() / a;
 }
 
 double geometric_share_per_strain(const LoadCase& lc) {
-  return lc.material.model == MaterialModel::elastic ? elastic_geometric_share : plastic_geometric_share;
+  return lc.any_inelastic() ? plastic_geometric_share : elastic_geometric_share;
 }
 
 double finite_strain_share(const LoadCase& lc) { return geometric_share_per_strain(lc) * mean_strain_at_max_depth(lc); }
@@ -385,7 +392,7 @@ RunConfiguration resolve_choices(const LoadCase& lc, const RunPlan& plan, const 
   std::tie(c.strain, c.strain_reason) = choose_strain(lc);
   const bool finite_strain = c.strain == StrainChoice::finite;
   c.element = choose_element(lc);
-  const bool plastic = lc.material.model != MaterialModel::elastic;
+  const bool plastic = lc.any_inelastic();
   // Plastic Newton iterations contract linearly (each moves the yield front across Gauss points
   // where the tangent jumps), so a factorization kept as GMRES's preconditioner serves several of
   // them; so it does for an elastic near field in finite strain, nonlinear and thousands of

@@ -6,6 +6,7 @@
 #include "indentsim/solvers/current_configuration_contact.hpp"
 #include "indentsim/solvers/finite_strain_bulk.hpp"
 #include "indentsim/base/worker_threads.hpp"
+#include "indentsim/materials/region_law.hpp"
 
 #include "indentsim/base/interruption.hpp"
 
@@ -35,6 +36,51 @@ bool unloads(const std::vector<double>& path) {
   for (std::size_t k = 1; k < path.size(); ++k)
     if (path[k] < path[k - 1]) return true;
   return false;
+}
+
+// Ilyushin's law of a material, checked: validate() refused a flow-stress law (power_law, ludwik,
+// ...) under Ilyushin's model; what it cannot see is the law's admissibility, named here with
+// the key of the region (`key_prefix` "layer[k]." for a layer).
+IlyushinLaw ilyushin_law(const MaterialInput& m, const std::string& source, const std::string& key_prefix) {
+  IlyushinLaw law(ElasticMaterial{m.E, m.nu}, m.e0, m.hardening, m.kappa, m.n);
+  if (auto violation = law.admissibility_violation())
+    throw InputError(source, key_prefix + (m.hardening == HardeningLaw::linear ? "material.kappa" : "material.n"),
+                     *violation);
+  return law;
+}
+
+// The small-strain point law of one material over `points` Gauss points: elasticity's, J2's or
+// Ilyushin's (with his unloading rule where the path unloads).
+std::unique_ptr<PointLaw> small_strain_law(const MaterialInput& m, std::size_t points, bool unloading_rule,
+                                           const std::string& source, const std::string& key_prefix) {
+  const ElasticMaterial material{m.E, m.nu};
+  switch (m.model) {
+    case MaterialModel::elastic: return std::make_unique<ElasticPointLaw>(material);
+    case MaterialModel::j2:
+      if (!m.flow_stress_law()) (void)ilyushin_law(m, source, key_prefix);  // omega(e_u)'s hardening, checked alike
+      return std::make_unique<J2PointLaw>(J2Law(material, make_flow_rule(m)), points);
+    case MaterialModel::ilyushin:
+      return std::make_unique<IlyushinPointLaw>(ilyushin_law(m, source, key_prefix), unloading_rule, points);
+  }
+  throw std::logic_error("small_strain_law: unknown material model");
+}
+
+// The finite-strain point law of one material (docs/MODEL.md §12): the small-strain law on the
+// logarithmic strains.
+std::unique_ptr<FiniteStrainPointLaw> finite_strain_law(const MaterialInput& m, std::size_t points, bool unloading_rule,
+                                                        const std::string& source, const std::string& key_prefix) {
+  const ElasticMaterial material{m.E, m.nu};
+  switch (m.model) {
+    case MaterialModel::elastic: return std::make_unique<HenckyPointLaw>(material, nullptr, m.elastic_stress);
+    case MaterialModel::j2:
+      if (!m.flow_stress_law()) (void)ilyushin_law(m, source, key_prefix);
+      return std::make_unique<J2LogStrainPointLaw>(J2Law(material, make_flow_rule(m)), points, m.elastic_stress);
+    case MaterialModel::ilyushin:
+      return std::make_unique<HenckyPointLaw>(
+          material, std::make_unique<IlyushinPointLaw>(ilyushin_law(m, source, key_prefix), unloading_rule, points),
+          m.elastic_stress);
+  }
+  throw std::logic_error("finite_strain_law: unknown material model");
 }
 
 }  // namespace
@@ -67,16 +113,6 @@ Simulation::Simulation(LoadCase load_case, const RunConfiguration& configuration
 
 void Simulation::build(const RunConfiguration& configuration, const std::optional<NearField>& start) {
   limit_library_threads();  // one BLAS/OpenMP thread per run (worker_threads.hpp)
-  const auto& m = load_case_.material;
-  const ElasticMaterial material{m.E, m.nu};
-  // validate() refused a flow-stress law (power_law, ludwik, ...) under Ilyushin's model.
-  std::optional<IlyushinLaw> law;
-  if (m.model != MaterialModel::elastic && !m.flow_stress_law()) {
-    law.emplace(material, m.e0, m.hardening, m.kappa, m.n);
-    if (auto violation = law->admissibility_violation())
-      throw InputError(load_case_.source, m.hardening == HardeningLaw::linear ? "material.kappa" : "material.n",
-                       *violation);
-  }
   config_ = configuration;
   control_ = LoadControl::of(load_case_);
   const MeshPlan& plan = config_.plan.mesh;
@@ -84,31 +120,12 @@ void Simulation::build(const RunConfiguration& configuration, const std::optiona
   mesh_ = std::make_unique<Mesh>(Mesh::from_plan(load_case_, plan));
   mesh_->set_element_kind(config_.element);
   pattern_ = std::make_unique<StiffnessPattern>(*mesh_);
-  stiffness_ = std::make_unique<ElasticStiffness>(*mesh_, material, *pattern_);
+  std::vector<ElasticMaterial> elastic_by_region;
+  for (std::size_t r = 0; r < load_case_.regions(); ++r)
+    elastic_by_region.push_back({load_case_.region_material(r).E, load_case_.region_material(r).nu});
+  stiffness_ = std::make_unique<ElasticStiffness>(*mesh_, elastic_by_region, *pattern_);
   bulk_ = stiffness_.get();
-  const std::size_t points = 4 * static_cast<std::size_t>(mesh_->elements());
-  if (config_.strain == StrainChoice::finite) {
-    // docs/MODEL.md §12: the laws of the logarithmic strain, the bulk in finite strain, the
-    // contact on the current surface -- every run, elastic ones too.
-    std::unique_ptr<FiniteStrainPointLaw> finite_law;
-    if (m.model == MaterialModel::j2)
-      finite_law =
-          std::make_unique<J2LogStrainPointLaw>(J2Law(material, make_flow_rule(m)), points, m.elastic_stress);
-    else if (m.model == MaterialModel::ilyushin)
-      finite_law = std::make_unique<HenckyPointLaw>(
-          material, std::make_unique<IlyushinPointLaw>(*law, unloads(load_case_.load.path), points), m.elastic_stress);
-    else
-      finite_law = std::make_unique<HenckyPointLaw>(material, nullptr, m.elastic_stress);
-    plastic_ = std::make_unique<FiniteStrainBulk>(*stiffness_, std::move(finite_law));
-    bulk_ = plastic_.get();
-  } else if (m.model != MaterialModel::elastic) {
-    std::unique_ptr<PointLaw> point_law;
-    if (m.model == MaterialModel::j2)
-      point_law = std::make_unique<J2PointLaw>(J2Law(material, make_flow_rule(m)), points);
-    else point_law = std::make_unique<IlyushinPointLaw>(*law, unloads(load_case_.load.path), points);
-    plastic_ = std::make_unique<InelasticBulk>(*stiffness_, std::move(point_law));
-    bulk_ = plastic_.get();
-  }
+  build_material_laws();
   if (config_.strain == StrainChoice::finite && load_case_.contact.friction > 0.0)
     contact_ = std::make_unique<CoulombCurrentConfigurationContact>(*mesh_, make_punch(load_case_.punch), *pattern_,
                                                                     stiffness_->values(), load_case_.contact.friction);
@@ -126,8 +143,12 @@ void Simulation::build(const RunConfiguration& configuration, const std::optiona
   settings_.displacement_scale = load_case_.max_depth();
   // Newton's residual is measured against the nodal forces of the scene: E* alpha_max per unit
   // thickness in plane strain, times the ring 2 pi a* in axisymmetry (docs/DESIGN.md §3).
-  settings_.force_scale = mesh_->kinematics().nodal_force_scale(
-      material.plane_strain_modulus() * load_case_.max_depth(), plan.contact_half_width_estimate);
+  // With layers, the stiffest region's E* (a scale, not physics: the largest keeps the tolerance
+  // conservative; docs/MODEL.md §14.1).
+  double modulus = 0.0;
+  for (const ElasticMaterial& material : elastic_by_region) modulus = std::max(modulus, material.plane_strain_modulus());
+  settings_.force_scale =
+      mesh_->kinematics().nodal_force_scale(modulus * load_case_.max_depth(), plan.contact_half_width_estimate);
   settings_.tolerance = load_case_.solver.tolerance;
   settings_.max_iterations = load_case_.solver.max_newton;
   const JacobianChoice jacobian = config_.jacobian;
@@ -142,6 +163,49 @@ void Simulation::build(const RunConfiguration& configuration, const std::optiona
 
   const std::vector<std::string> implausible = plausibility_warnings(load_case_, plan);
   state_.warnings.insert(state_.warnings.end(), implausible.begin(), implausible.end());
+}
+
+// The point laws of the specimen's regions (docs/MODEL.md §14.1): in finite strain every run has
+// one (elasticity too); in small strain an elastic specimen has none (the assembled K is its bulk)
+// and an elastic region of an inelastic specimen has the elastic point law.  A specimen of one
+// region gets its law itself; several get a region law over them.
+void Simulation::build_material_laws() {
+  const std::size_t points = 4 * static_cast<std::size_t>(mesh_->elements());
+  const std::size_t regions = load_case_.regions();
+  const bool finite = config_.strain == StrainChoice::finite;
+  if (!finite && !load_case_.any_inelastic()) return;
+  const bool unloading_rule = unloads(load_case_.load.path);
+  std::optional<PointRegions> point_regions;
+  if (regions > 1) {
+    std::vector<int> point_region(points);
+    for (int ei = 0; ei < mesh_->elements_x(); ++ei)
+      for (int ej = 0; ej < mesh_->elements_y(); ++ej)
+        for (std::size_t g = 0; g < 4; ++g)
+          point_region[4 * static_cast<std::size_t>(mesh_->element(ei, ej)) + g] = mesh_->region(ej);
+    point_regions.emplace(std::move(point_region), static_cast<int>(regions));
+  }
+  const auto region_points = [&](std::size_t r) { return point_regions ? point_regions->points(static_cast<int>(r)) : points; };
+  const auto key_prefix = [](std::size_t r) { return r == 0 ? std::string() : fmt::format("layer[{}].", r); };
+  if (finite) {
+    // docs/MODEL.md §12: the laws of the logarithmic strain, the bulk in finite strain, the
+    // contact on the current surface -- every run, elastic ones too.
+    std::vector<std::unique_ptr<FiniteStrainPointLaw>> laws;
+    for (std::size_t r = 0; r < regions; ++r)
+      laws.push_back(finite_strain_law(load_case_.region_material(r), region_points(r), unloading_rule,
+                                       load_case_.source, key_prefix(r)));
+    std::unique_ptr<FiniteStrainPointLaw> law =
+        regions == 1 ? std::move(laws.front()) : std::make_unique<RegionFiniteStrainLaw>(*point_regions, std::move(laws));
+    plastic_ = std::make_unique<FiniteStrainBulk>(*stiffness_, std::move(law));
+  } else {
+    std::vector<std::unique_ptr<PointLaw>> laws;
+    for (std::size_t r = 0; r < regions; ++r)
+      laws.push_back(small_strain_law(load_case_.region_material(r), region_points(r), unloading_rule,
+                                      load_case_.source, key_prefix(r)));
+    std::unique_ptr<PointLaw> law =
+        regions == 1 ? std::move(laws.front()) : std::make_unique<RegionPointLaw>(*point_regions, std::move(laws));
+    plastic_ = std::make_unique<InelasticBulk>(*stiffness_, std::move(law));
+  }
+  bulk_ = plastic_.get();
 }
 
 Simulation::~Simulation() = default;
@@ -672,6 +736,9 @@ std::optional<std::vector<double>> Simulation::force_sensitivities(const std::ve
 std::optional<Simulation::Sensitivities> Simulation::sensitivities(const std::vector<MaterialParameter>& parameters,
                                                                    bool with_displacement) {
   const MaterialInput& m = load_case_.material;
+  // Several materials: the internal force is no longer homogeneous of degree one in one E
+  // (docs/MODEL.md §14.1); finite differences of whole runs give the sensitivities.
+  if (!load_case_.layers.empty()) return std::nullopt;
   for (MaterialParameter p : parameters)
     if (p == MaterialParameter::nu) return std::nullopt;  // nu also shapes the condensed far field
   if (contact_->carries_history()) return std::nullopt;  // friction's slip history: its derivative is not carried

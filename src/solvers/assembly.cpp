@@ -119,14 +119,15 @@ ElementVector gather(const Mesh& mesh, int ei, int ej, const double* u) {
   return ue;
 }
 
-ElasticStiffness::ElasticStiffness(const Mesh& mesh, const ElasticMaterial& material,
+ElasticStiffness::ElasticStiffness(const Mesh& mesh, std::vector<ElasticMaterial> by_region,
                                    const StiffnessPattern& pattern)
-    : mesh_(mesh), pattern_(pattern) {
-  // One representative rectangle per (column class, height class).
-  const LameConstants lame = material.lame();
-  lame_ = lame;
+    : mesh_(mesh), pattern_(pattern), by_region_(std::move(by_region)) {
+  if (static_cast<int>(by_region_.size()) != mesh.regions())
+    throw std::invalid_argument("ElasticStiffness: one material per region of the mesh");
+  // One representative rectangle per (column class, height class), a matrix per region on it.
   for (const Rectangle& rect : mesh.class_rectangles()) {
-    by_class_.push_back(mesh.kinematics().elastic_stiffness(rect, lame, mesh.element_kind()));
+    for (const ElasticMaterial& material : by_region_)
+      by_class_.push_back(mesh.kinematics().elastic_stiffness(rect, material.lame(), mesh.element_kind()));
     quadrature_by_class_.push_back(mesh.kinematics().quadrature(rect, mesh.element_kind()));
   }
 
@@ -159,7 +160,7 @@ std::array<GaussPointState, 4> ElasticStiffness::gauss_point_states(int ei, int 
   std::array<GaussPointState, 4> states;
   if (committed_u_.empty()) return states;
   const auto eps = strains(ei, ej, committed_u_.data());
-  const ConstitutiveMatrix d = isotropic_stiffness(lame_);
+  const ConstitutiveMatrix d = isotropic_stiffness(material(ej).lame());
   for (int g = 0; g < 4; ++g) {
     states[g].stress = d * eps[g];
     states[g].strain_intensity = strain_intensity(eps[g]);

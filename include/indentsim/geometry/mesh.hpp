@@ -51,6 +51,17 @@ std::vector<double> graded_axis(double length, double fine_length, double spacin
 /// Number of nodes graded_axis would return, computed without allocating.
 std::int64_t graded_axis_count(double length, double fine_length, double spacing, double growth);
 
+/// The fewest element rows across a layer (docs/MODEL.md §14.3).
+inline constexpr int min_rows_per_layer = 4;
+/// An axis of depths (0 at the surface, ascending) with a node on every interface (ascending,
+/// inside the axis; docs/MODEL.md §14.3): an interface on a node keeps the axis as it is, else
+/// the nearest free node moves onto it (or, when that node is taken, the interface is inserted);
+/// a layer with fewer than `min_rows` rows is divided evenly into `min_rows`; then any element
+/// more than `ratio_limit` times the size of a neighbour is halved, until none is (the 2:1 rule),
+/// so that a film thinner than the fine spacing refines the rows near it.
+std::vector<double> lay_interfaces(std::vector<double> depths, const std::vector<double>& interfaces, int min_rows,
+                                   double ratio_limit);
+
 class Mesh {
 public:
   /// x ascending from 0, y ascending from -ly to 0.
@@ -104,6 +115,13 @@ public:
   /// element of the pair shares (its matrices and quadratures are tabulated on it).
   std::vector<Rectangle> class_rectangles() const;
 
+  /// The material region of element row ej (docs/MODEL.md §14.1): 0 the substrate, k layer k
+  /// from the surface.  Layers are horizontal bands between mesh lines, so a row has one region.
+  int region(int ej) const { return row_region_.empty() ? 0 : row_region_[ej]; }
+  int regions() const { return regions_; }
+  /// Sets the region of every element row (one entry per row, each in [0, regions)).
+  void set_row_regions(std::vector<int> row_region, int regions);
+
   /// Classes of equal element widths / heights: elements of one class pair share a matrix.
   int width_class(int ei) const { return width_class_[ei]; }
   int height_class(int ej) const { return height_class_[ej]; }
@@ -116,6 +134,8 @@ private:
   int equations_ = 0;
   std::vector<int> width_class_, height_class_;
   int width_classes_ = 0, height_classes_ = 0;
+  std::vector<int> row_region_;
+  int regions_ = 1;
   ElementKind element_kind_ = ElementKind::q1;
   std::shared_ptr<const Kinematics> kinematics_ = make_kinematics(SceneKind::plane_strain);
 };

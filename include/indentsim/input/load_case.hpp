@@ -97,6 +97,13 @@ struct MaterialInput {
   bool flow_stress_law() const { return hardening != HardeningLaw::linear && hardening != HardeningLaw::power; }
 };
 
+/// One layer of a coated specimen (docs/MODEL.md §14): a band of `thickness` below the layers
+/// above it, of its own material, perfectly bonded to its neighbours.
+struct LayerInput {
+  double thickness = 0.0;  ///< [m]
+  MaterialInput material;
+};
+
 /// What the load path steps (docs/MODEL.md §13.1): the punch's depth, the force P being the
 /// result, or the force, the depth being one more unknown of each increment.
 enum class LoadControlKind { depth, force };
@@ -221,7 +228,10 @@ struct LoadCase {
   std::string source = "<defaults>";  ///< file it was read from, for messages
   GeometryInput geometry;
   PunchInput punch;
-  MaterialInput material;
+  MaterialInput material;  ///< the substrate's (the whole specimen's without layers)
+  /// The layers on the substrate, from the surface down (docs/MODEL.md §14); empty for a
+  /// homogeneous specimen.
+  std::vector<LayerInput> layers;
   LoadInput load;
   MeshInput mesh;
   OutputInput output;
@@ -232,6 +242,25 @@ struct LoadCase {
   /// The deepest point of the path [m]: the deepest waypoint under depth control; under force
   /// control the depth estimate (0 before the pilot has measured it).
   double max_depth() const;
+
+  /// The material regions of the specimen (docs/MODEL.md §14.1): region 0 the substrate, region k
+  /// layer k from the surface (k = 1 ... layers.size()).
+  std::size_t regions() const { return 1 + layers.size(); }
+  const MaterialInput& region_material(std::size_t region) const {
+    return region == 0 ? material : layers[region - 1].material;
+  }
+  /// The material at the surface, which the punch meets: the top layer's, or the substrate's.
+  const MaterialInput& surface_material() const { return layers.empty() ? material : layers.front().material; }
+  /// Some region is not linear elastic.
+  bool any_inelastic() const;
+  /// Some region flows by `rule`; any_rate_dependent: by a rule other than none.
+  bool any_rate(RateLaw rule) const;
+  bool any_rate_dependent() const;
+  /// The depths [m] of the interfaces below the surface, increasing: the bottom of each layer.
+  std::vector<double> interface_depths() const;
+  /// The region of the material at depth d below the surface (an interface belongs to the region
+  /// above it).
+  std::size_t region_at_depth(double depth) const;
 };
 
 /// Reads and validates a load case.  `overrides` are "section.key=value" strings

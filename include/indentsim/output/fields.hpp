@@ -18,7 +18,8 @@
 namespace indentsim {
 
 /// Gauss-point stresses extrapolated to each element's vertices and averaged over the elements
-/// that share a node: (sigma11, sigma22, sigma12, sigma33, e_u) per node.
+/// that share a node, within one material region (an interface node takes the layer above's):
+/// (sigma11, sigma22, sigma12, sigma33, e_u) per node.
 struct NodalStresses {
   std::vector<std::array<double, 5>> values;  ///< indexed by Mesh::node(i, j)
 };

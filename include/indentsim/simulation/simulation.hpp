@@ -158,6 +158,8 @@ private:
   /// Builds mesh, laws, contact and the Newton system on `configuration`, on the near field
   /// `start` if given.
   void build(const RunConfiguration& configuration, const std::optional<NearField>& start = std::nullopt);
+  /// The point laws of the specimen's material regions, and the bulk over them (plastic_).
+  void build_material_laws();
   struct SolveCounters {
     long iterations = 0, factorizations = 0;
   };

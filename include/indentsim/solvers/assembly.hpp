@@ -124,11 +124,15 @@ public:
   virtual std::optional<FarFieldCheck> far_field_check() const { return std::nullopt; }
 };
 
-/// Linear elasticity on the mesh: one element matrix per class of equal rectangles (the paper's
-/// closed form in plane strain, Gauss quadrature else), and the assembled stiffness K.
+/// Linear elasticity on the mesh: one element matrix per class of equal rectangles and material
+/// region (the paper's closed form in plane strain, Gauss quadrature else), and the assembled
+/// stiffness K.
 class ElasticStiffness : public BulkModel {
 public:
-  ElasticStiffness(const Mesh& mesh, const ElasticMaterial& material, const StiffnessPattern& pattern);
+  /// `by_region`: the elastic constants of each of the mesh's material regions (Mesh::region).
+  ElasticStiffness(const Mesh& mesh, std::vector<ElasticMaterial> by_region, const StiffnessPattern& pattern);
+  ElasticStiffness(const Mesh& mesh, const ElasticMaterial& material, const StiffnessPattern& pattern)
+      : ElasticStiffness(mesh, std::vector<ElasticMaterial>{material}, pattern) {}
 
   ElementVector element_force(int ei, int ej) const override;
   std::vector<double> history() const override { return {}; }
@@ -139,7 +143,11 @@ public:
   long plastic_points() const override { return 0; }
   double max_strain_intensity() const override { return max_strain_intensity_; }
   std::array<GaussPointState, 4> gauss_point_states(int ei, int ej) const override;
-  const ElementMatrix& cached_matrix(int ei, int ej) const { return by_class_[class_of(ei, ej)]; }
+  const ElementMatrix& cached_matrix(int ei, int ej) const {
+    return by_class_[class_of(ei, ej) * by_region_.size() + static_cast<std::size_t>(mesh_.region(ej))];
+  }
+  /// The elastic constants of element row ej's region.
+  const ElasticMaterial& material(int ej) const { return by_region_[static_cast<std::size_t>(mesh_.region(ej))]; }
   /// B and the measure at the 2x2 Gauss points of element (ei, ej), tabulated per class like its
   /// matrix: every element pass (strains, inelastic forces and tangents) reads them here
   /// (recomputing B for every element at every increment was a sixth of a small elastic run).
@@ -159,10 +167,11 @@ private:
 
   const Mesh& mesh_;
   const StiffnessPattern& pattern_;
+  /// Element matrices at class * regions + region.
   std::vector<ElementMatrix, Eigen::aligned_allocator<ElementMatrix>> by_class_;
   std::vector<ElementQuadrature, Eigen::aligned_allocator<ElementQuadrature>> quadrature_by_class_;
   std::vector<double> values_;
-  LameConstants lame_;
+  std::vector<ElasticMaterial> by_region_;
   std::vector<double> committed_u_;
   double max_strain_intensity_ = 0.0;
 };

@@ -1,0 +1,363 @@
+// Coated and layered specimens (docs/MODEL.md §14): the material-region seam is bit for bit on
+// one material, a coated specimen tends to its film's Hertz force as the film thickens and to its
+// substrate's as a compliant film thins, tractions are continuous across an interface while the
+// in-plane stress jumps, and every bad layer is refused naming the layer and the key.
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "indentsim/base/error.hpp"
+#include "indentsim/geometry/mesh.hpp"
+#include "indentsim/input/load_case.hpp"
+#include "indentsim/simulation/simulation.hpp"
+#include "indentsim/solvers/layer_forces.hpp"
+#include "test_support.hpp"
+
+namespace fs = std::filesystem;
+using namespace indentsim;
+using indentsim::testing::small_sphere_case;
+
+namespace {
+
+/// The forces at every increment of a run.
+std::vector<double> forces_of(const LoadCase& lc) {
+  Simulation sim(lc);
+  std::vector<double> forces;
+  sim.run([&](const IncrementRecord& r) { forces.push_back(r.force); });
+  return forces;
+}
+
+/// The depth of the k-th node row below the surface of the case's own (homogeneous) mesh.
+double node_depth(const LoadCase& lc, std::size_t k) {
+  const MeshPlan plan = plan_mesh(lc);
+  return graded_axis(lc.geometry.ly, plan.fine_depth, plan.fine_spacing, plan.growth).at(k);
+}
+
+/// A layer of `material` and `thickness` on the case's substrate.
+LoadCase with_layer(LoadCase lc, double thickness, const MaterialInput& material) {
+  lc.layers.push_back({thickness, material});
+  validate(lc);
+  return lc;
+}
+
+MaterialInput elastic(double E, double nu) {
+  MaterialInput m;
+  m.model = MaterialModel::elastic;
+  m.E = E;
+  m.nu = nu;
+  return m;
+}
+
+/// Hertz's force of a rigid sphere of radius R at depth h on a half-space of modulus E*.
+double hertz_force(double E_star, double R, double h) { return 4.0 / 3.0 * E_star * std::sqrt(R) * std::pow(h, 1.5); }
+
+/// The axisymmetric elastic sphere of loadcases/axisymmetric/elastic_sphere.toml (a/lx < 0.004).
+LoadCase sphere_on(const MaterialInput& substrate) {
+  LoadCase lc = indentsim::testing::shipped_case("axisymmetric/elastic_sphere.toml", {"load.increments=2"});
+  lc.material = substrate;
+  return lc;
+}
+
+const std::string& layer_case = indentsim::testing::small_case_toml;
+
+/// The key a load case of `layers` (TOML appended to layer_case) is refused by, or "" when taken.
+std::string refused_key(const std::string& layers, const std::vector<std::string>& overrides = {}) {
+  try {
+    parse_load_case(layer_case + layers, "layers.toml", overrides);
+  } catch (const InputError& e) {
+    return e.key();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(Layers, ALayerOfTheSubstratesOwnMaterialOnAMeshLineIsTheHomogeneousSpecimenBitForBit) {
+  // The seam (docs/MODEL.md §14.1): the element matrices, the point laws and the history by
+  // region give exactly one material's run when every region holds that material and the
+  // interface lies on a line of the homogeneous mesh.
+  for (const SceneKind scene : {SceneKind::plane_strain, SceneKind::axisymmetric})
+    for (const MaterialModel model : {MaterialModel::elastic, MaterialModel::ilyushin, MaterialModel::j2}) {
+      SCOPED_TRACE(fmt::format("{} {}", to_string(scene), to_string(model)));
+      LoadCase homogeneous = small_sphere_case(scene, model, HardeningLaw::linear);
+      homogeneous.load.path = {0.0, 20e-6, 8e-6};
+      homogeneous.load.segment_increments = {4, 2};
+      const LoadCase coated = with_layer(homogeneous, node_depth(homogeneous, 6), homogeneous.material);
+      EXPECT_EQ(Mesh::from_plan(coated, plan_mesh(coated)).y(), Mesh::from_plan(homogeneous, plan_mesh(homogeneous)).y());
+      const std::vector<double> expected = forces_of(homogeneous), got = forces_of(coated);
+      ASSERT_EQ(got.size(), expected.size());
+      for (std::size_t k = 0; k < got.size(); ++k) EXPECT_EQ(got[k], expected[k]) << "increment " << k;
+    }
+}
+
+TEST(Layers, InterfacesAreMeshLinesAndEveryLayerHasItsRows) {
+  // docs/MODEL.md §14.3: every interface a node row; at least 4 rows per layer however thin; no
+  // element more than twice its neighbour once a thin film refined the rows near it.
+  LoadCase lc = small_sphere_case(SceneKind::axisymmetric, MaterialModel::elastic, HardeningLaw::linear);
+  const double spacing = plan_mesh(lc).fine_spacing;
+  lc = with_layer(lc, 0.013 * spacing, elastic(400e9, 0.25));          // far thinner than an element
+  lc = with_layer(lc, 2.37 * spacing, elastic(100e9, 0.3));            // between lines
+  lc = with_layer(lc, 40.0 * spacing, elastic(150e9, 0.3));            // into the graded zone
+  const Mesh mesh = Mesh::from_plan(lc, plan_mesh(lc));
+  const std::vector<double> interfaces = lc.interface_depths();
+  std::vector<int> rows(lc.regions(), 0);
+  for (int ej = 0; ej < mesh.elements_y(); ++ej) {
+    ++rows[static_cast<std::size_t>(mesh.region(ej))];
+    const double top = -mesh.y(ej + 1), bottom = -mesh.y(ej);
+    EXPECT_EQ(static_cast<int>(lc.region_at_depth(0.5 * (top + bottom))), mesh.region(ej));
+    const double size = bottom - top;
+    if (ej > 0) EXPECT_LE(size, 2.0 * (mesh.y(ej) - mesh.y(ej - 1)) * (1 + 1e-12)) << "row " << ej;
+    if (ej + 1 < mesh.elements_y()) EXPECT_LE(size, 2.0 * (mesh.y(ej + 2) - mesh.y(ej + 1)) * (1 + 1e-12)) << "row " << ej;
+  }
+  for (const double depth : interfaces) {
+    bool on_a_line = false;
+    for (const double y : mesh.y()) on_a_line = on_a_line || y == -depth;
+    EXPECT_TRUE(on_a_line) << "interface at " << depth;
+  }
+  for (std::size_t k = 1; k < lc.regions(); ++k) EXPECT_GE(rows[k], min_rows_per_layer) << "layer " << k;
+  EXPECT_EQ(plan_mesh(lc).nodes_y, mesh.nodes_y());
+}
+
+TEST(Layers, AnElasticFilmThickAgainstTheContactGivesTheFilmsHertzForce) {
+  // A stiff film (210 GPa) on a compliant substrate (100 GPa) under a sphere: the substrate's
+  // share falls as a/t (Gao, Chiu and Lee, Int. J. Solids Struct. 29, 1992, eq. 20's first order),
+  // so P(t) and P(2t) extrapolate to the infinitely thick film, whose force is Hertz's.
+  const MaterialInput film = elastic(210e9, 0.3);
+  const LoadCase homogeneous = sphere_on(film);
+  const double R = homogeneous.punch.radius, h = homogeneous.max_depth(), a = std::sqrt(R * h);
+  const double thin = forces_of(with_layer(sphere_on(elastic(100e9, 0.3)), 20 * a, film)).back();
+  const double thick = forces_of(with_layer(sphere_on(elastic(100e9, 0.3)), 40 * a, film)).back();
+  const double own = forces_of(homogeneous).back();
+  const double hertz = hertz_force(film.E / (1 - film.nu * film.nu), R, h);
+  const double extrapolated = 2.0 * thick - thin;
+  std::cout << fmt::format("P(t = 20 a) = {:.5g} N, P(40 a) = {:.5g} N -> {:.5g} N at t -> infinity; the film's own "
+                           "{:.5g} N, Hertz {:.5g} N\n",
+                           thin, thick, extrapolated, own, hertz);
+  EXPECT_LT(thin, thick);
+  EXPECT_LT(thick, own);
+  EXPECT_NEAR(extrapolated / own, 1.0, 5e-3);     // the film's own run on the same mesh
+  EXPECT_NEAR(extrapolated / hertz, 1.0, 1e-2);   // and Hertz, as the homogeneous scenes agree with it
+}
+
+TEST(Layers, AThinCompliantFilmGivesTheSubstratesForce) {
+  // A compliant film (50 GPa) on steel (210 GPa): its extra compliance grows as its thickness t,
+  // so P(t) and P(t/4) extrapolate to t = 0, the bare substrate's force.
+  const MaterialInput substrate = elastic(210e9, 0.3);
+  const LoadCase bare = sphere_on(substrate);
+  const double a = std::sqrt(bare.punch.radius * bare.max_depth());
+  const double p_t = forces_of(with_layer(bare, a / 100, elastic(50e9, 0.3))).back();
+  const double p_quarter = forces_of(with_layer(bare, a / 400, elastic(50e9, 0.3))).back();
+  const double own = forces_of(bare).back();
+  std::cout << fmt::format("P(t = a/100) = {:.5g} N, P(a/400) = {:.5g} N, the bare substrate's {:.5g} N\n", p_t, p_quarter, own);
+  EXPECT_LT(p_t, p_quarter);
+  EXPECT_LT(p_quarter, own);
+  // First order in t: the deviation falls by 4 from t to t/4, and the extrapolation is the substrate.
+  EXPECT_NEAR((own - p_t) / (own - p_quarter), 4.0, 0.5);
+  EXPECT_NEAR((4.0 * p_quarter - p_t) / 3.0 / own, 1.0, 2e-3);
+}
+
+TEST(Layers, TractionsAreContinuousAcrossAnInterfaceAndTheLayersAreInEquilibrium) {
+  // A film four times stiffer than its substrate, its interface at 0.7 a*, near the depth of the
+  // largest shear: sigma_22 and sigma_12 extrapolated to the interface from the rows above and
+  // below differ by a discretization error, which halves as the mesh does; sigma_11 jumps by the
+  // physics (the film carries the bending), whatever the mesh; and the force across every line is
+  // P to round-off.
+  for (const SceneKind scene : {SceneKind::plane_strain, SceneKind::axisymmetric}) {
+    std::vector<double> traction_jumps, in_plane_jumps;
+    for (const int nodes : {20, 40}) {
+      SCOPED_TRACE(fmt::format("{}, {} contact nodes", to_string(scene), nodes));
+      LoadCase lc = small_sphere_case(scene, MaterialModel::elastic, HardeningLaw::linear);
+      lc.mesh.contact_nodes = nodes;
+      lc.material = elastic(100e9, 0.3);
+      lc = with_layer(lc, 0.7 * *lc.mesh.contact_half_width, elastic(400e9, 0.25));
+      Simulation sim(lc);
+      sim.run();
+      const Mesh& mesh = sim.mesh();
+      const double force = sim.contact().force;
+      for (const LayerForce& line : layer_forces(mesh, sim.bulk())) {
+        if (!std::isnan(line.below)) EXPECT_NEAR(line.below, force, 1e-8 * force);
+        if (!std::isnan(line.above)) EXPECT_NEAR(line.above, force, 1e-8 * force);
+      }
+      int below = 0;
+      while (mesh.region(below + 1) == 0) ++below;  // the substrate's top row; the film's first is below + 1
+      const int above = below + 1;
+      // Linear extrapolation in the element's height from its two Gauss rows (at 1/2 -+ 1/(2 sqrt 3)
+      // of it) to its edge on the interface (1 from below, 0 from above).
+      const double lo = 0.5 - 0.5 / std::sqrt(3.0), hi = 0.5 + 0.5 / std::sqrt(3.0);
+      const auto at_interface = [&](int ej, int ei, int component, double t) {
+        const auto s = sim.bulk().gauss_point_states(ei, ej);  // vertex order: (i, j), (i, j+1), (i+1, j), (i+1, j+1)
+        const double bottom = 0.5 * (s[0].stress[component] + s[2].stress[component]);
+        const double top = 0.5 * (s[1].stress[component] + s[3].stress[component]);
+        return bottom + (top - bottom) * (t - lo) / (hi - lo);
+      };
+      double p0 = 0.0, traction_jump = 0.0, in_plane_jump = 0.0;
+      for (int ei = 0; mesh.x(ei) < 1.5 * sim.contact().half_width; ++ei) {
+        p0 = std::max(p0, std::abs(at_interface(below, ei, 1, 1.0)));
+        for (const int c : {1, 2})
+          traction_jump = std::max(traction_jump, std::abs(at_interface(below, ei, c, 1.0) - at_interface(above, ei, c, 0.0)));
+        in_plane_jump = std::max(in_plane_jump, std::abs(at_interface(below, ei, 0, 1.0) - at_interface(above, ei, 0, 0.0)));
+      }
+      std::cout << fmt::format("{}, {} contact nodes: at the interface |sigma_22| up to {:.4g} Pa; the tractions jump "
+                               "by up to {:.3g} of it, sigma_11 by {:.3g} of it\n",
+                               to_string(scene), nodes, p0, traction_jump / p0, in_plane_jump / p0);
+      traction_jumps.push_back(traction_jump / p0);
+      in_plane_jumps.push_back(in_plane_jump / p0);
+    }
+    EXPECT_LT(traction_jumps[1], 0.6 * traction_jumps[0]);  // first order: halves with the mesh
+    EXPECT_LT(traction_jumps[1], 0.05);
+    EXPECT_GT(in_plane_jumps[1], 0.8 * in_plane_jumps[0]);  // the physics: stays
+    EXPECT_GT(in_plane_jumps[1], 10.0 * traction_jumps[1]);
+  }
+}
+
+TEST(Layers, ACoatedCaseWritesItsLayersBackAndAResumeComparesThem) {
+  const std::string toml = layer_case + R"(
+[[layer]]
+thickness = 1e-5
+[layer.material]
+model = "j2"
+E = 400e9
+nu = 0.25
+yield_stress = 5e9
+[[layer]]
+thickness = 2e-5
+[layer.material]
+model = "elastic"
+E = 150e9
+nu = 0.3
+)";
+  const LoadCase lc = parse_load_case(toml, "coated.toml");
+  ASSERT_EQ(lc.layers.size(), 2u);
+  EXPECT_EQ(lc.layers[0].material.model, MaterialModel::j2);
+  EXPECT_DOUBLE_EQ(lc.layers[0].material.e0, e0_of_yield_stress(5e9, 400e9, 0.25));
+  const LoadCase back = parse_load_case(to_toml(lc), "case.toml");
+  EXPECT_EQ(first_physics_difference(lc, back), "");
+  ASSERT_EQ(back.layers.size(), 2u);
+  EXPECT_EQ(back.layers[1].thickness, 2e-5);
+  // --set addresses a layer's keys; a resumed run may not change them.
+  const LoadCase changed = parse_load_case(toml, "coated.toml", {"layer.2.material.E=160e9"});
+  EXPECT_EQ(changed.layers[1].material.E, 160e9);
+  EXPECT_EQ(first_physics_difference(lc, changed), "layer[2].material.E");
+  EXPECT_EQ(first_physics_difference(lc, parse_load_case(toml, "coated.toml", {"layer.1.thickness=1.5e-5"})),
+            "layer[1].thickness");
+}
+
+TEST(Layers, BadLayersAreRefusedNamingTheLayerAndTheKey) {
+  // A layer of `thickness` (TOML text) whose material has the required keys and `extra` lines.
+  const auto layer = [](const std::string& thickness, const std::string& extra = "") {
+    return "\n[[layer]]\nthickness = " + thickness + "\n[layer.material]\nmodel = \"elastic\"\nE = 1e9\nnu = 0.3\n" + extra;
+  };
+  const std::string film = layer("1e-5");
+  EXPECT_EQ(refused_key(film), "");
+  EXPECT_EQ(refused_key(layer("0.0")), "layer[1].thickness");
+  EXPECT_EQ(refused_key(film + layer("-1e-6")), "layer[2].thickness");
+  EXPECT_EQ(refused_key(layer("0.02")), "layer[1].thickness");            // deeper than geometry.ly
+  EXPECT_EQ(refused_key(film + layer("0.99999e-2")), "layer[2].thickness");  // the stack reaches geometry.ly
+  EXPECT_EQ(refused_key(layer("\"thin\"")), "layer[1].thickness");
+  EXPECT_EQ(refused_key("\n[[layer]]\nmaterial = { model = \"elastic\", E = 1e9, nu = 0.3 }\n"), "layer[1].thickness");
+  EXPECT_EQ(refused_key("\n[[layer]]\nthickness = 1e-5\n"), "layer[1].material");
+  EXPECT_EQ(refused_key("\n[[layer]]\nthickness = 1e-5\nmaterial = 3\n"), "layer[1].material");
+  EXPECT_EQ(refused_key("\n[[layer]]\nthickness = 1e-5\ncolour = 3\n"), "layer[1].colour");
+  EXPECT_EQ(refused_key(film + layer("1e-5", "Young = 1e9\n")), "layer[2].material.Young");
+  EXPECT_EQ(refused_key("\n[[layer]]\nthickness = 1e-5\n[layer.material]\nmodel = \"elastic\"\nnu = 0.3\n"),
+            "layer[1].material.E");  // a required key missing
+  EXPECT_EQ(refused_key("\n[[layer]]\nthickness = 1e-5\n[layer.material]\nmodel = \"elastic\"\nE = -1e9\nnu = 0.3\n"),
+            "layer[1].material.E");
+  EXPECT_EQ(refused_key("\n[[layer]]\nthickness = 1e-5\n[layer.material]\nmodel = \"elastic\"\nE = 1e9\nnu = 0.5\n"),
+            "layer[1].material.nu");
+  EXPECT_EQ(refused_key("\n[[layer]]\nthickness = 1e-5\n[layer.material]\nmodel = \"plastic\"\nE = 1e9\nnu = 0.3\n"),
+            "layer[1].material.model");
+  // A model, law or rule the scene does not allow, as [material] would refuse it.
+  const std::string ilyushin = "\n[[layer]]\nthickness = 1e-5\n[layer.material]\nmodel = \"ilyushin\"\nE = 1e9\nnu = 0.3\n";
+  EXPECT_EQ(refused_key(ilyushin + "hardening = \"voce\"\nQ = 1e8\nb = 10\n"), "layer[1].material.hardening");
+  EXPECT_EQ(refused_key(layer("1e-5", "elastic_stress = \"kirchhoff\"\n")), "layer[1].material.elastic_stress");
+  const std::string j2 = "\n[[layer]]\nthickness = 1e-5\n[layer.material]\nmodel = \"j2\"\nE = 1e9\nnu = 0.3\n";
+  EXPECT_EQ(refused_key(j2 + "rate = \"norton\"\ncreep_coefficient = 1e-3\nreference_stress = 1e8\nrate_exponent = 3\n"),
+            "layer[1].material.rate");  // creep needs load.times
+  EXPECT_EQ(refused_key(j2 + "kappa = 0.5\nQ = 1e8\n"), "layer[1].material.Q");  // another law's key
+  // Deformation theory beside a region that creeps.
+  EXPECT_EQ(refused_key(ilyushin + "\n[[layer]]\nthickness = 1e-5\n[layer.material]\nmodel = \"j2\"\nE = 1e9\nnu = "
+                        "0.3\nrate = \"norton\"\ncreep_coefficient = 1e-3\nreference_stress = 1e8\nrate_exponent = 3\n",
+                        {"load.times=[0, 10]"}),
+            "layer[1].material.model");
+  try {
+    parse_load_case("layer = 3\n" + layer_case, "layers.toml");
+    ADD_FAILURE() << "layer = 3 was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.key(), "layer");
+  }
+  EXPECT_EQ(refused_key("\n[layer]\nthickness = 1e-5\n"), "layer");
+  // --set names a layer that is there, and its keys are checked as the layer's.
+  EXPECT_EQ(refused_key(film, {"layer.2.material.E=1e9"}), "layer.2.material.E");
+  EXPECT_EQ(refused_key(film, {"layer.1.material.E=-1"}), "layer[1].material.E");
+  EXPECT_EQ(refused_key(film, {"layer.1.thickness=0"}), "layer[1].thickness");
+  EXPECT_EQ(refused_key(film, {"layer.x.thickness=1"}), "layer.x.thickness");
+  EXPECT_EQ(refused_key(film, {"layer.1.material=1"}), "layer.1.material");
+}
+
+class LayersCli : public indentsim::testing::CliTest {};
+
+TEST_F(LayersCli, ABadLayerExitsWith2NamingItAndWritesNothing) {
+  const fs::path file = dir_ / "coated.toml";
+  std::ofstream(file) << layer_case << "\n[[layer]]\nthickness = 1e-5\n[layer.material]\nmodel = \"plastic\"\nE = 1e9\nnu = 0.3\n";
+  expect_refused("run " + file.string(), "layer[1].material.model");
+}
+
+TEST_F(LayersCli, ACoatedRunWritesItsLayersAndRegionsAndResumesToTheSameCurve) {
+  // A J2 film on an elastic substrate under force control, checkpointed and resumed: the curve
+  // is the uninterrupted run's, summary.json lists the layers, the fields carry the regions.
+  const fs::path file = dir_ / "coated.toml";
+  std::ofstream(file) << R"(
+[geometry]
+kind = "axisymmetric"
+lx = 0.3e-3
+ly = 0.3e-3
+[punch]
+shape = "sphere"
+radius = 20e-6
+[material]
+model = "elastic"
+E = 200e9
+nu = 0.3
+[[layer]]
+thickness = 0.5e-6
+[layer.material]
+model = "j2"
+E = 70e9
+nu = 0.33
+yield_stress = 300e6
+hardening = "power"
+n = 0.1
+[load]
+control = "force"
+path = [0.0, 2e-3, 0.2e-3]
+increments = [8, 4]
+[mesh]
+contact_nodes = 10
+[output]
+checkpoint_every = 3
+fields_every = 0
+)";
+  ASSERT_EQ(cli("run " + file.string() + " --quiet --out " + (dir_ / "full").string()), 0) << err();
+  const auto summary = nlohmann::json::parse(indentsim::testing::slurp(dir_ / "full" / "summary.json"));
+  ASSERT_TRUE(summary.contains("layers")) << summary.dump(2);
+  EXPECT_EQ(summary["layers"][0]["model"], "j2");
+  EXPECT_EQ(summary["layers"][0]["thickness"], 0.5e-6);
+  EXPECT_EQ(summary["material"]["E"], 200e9);
+  bool region_field = false;
+  for (const auto& entry : fs::recursive_directory_iterator(dir_ / "full"))
+    if (entry.path().extension() == ".vtu")
+      region_field = region_field || indentsim::testing::slurp(entry.path()).find("Name=\"region\"") != std::string::npos;
+  EXPECT_TRUE(region_field);
+  ASSERT_EQ(cli("run " + file.string() + " --quiet --out " + (dir_ / "killed").string(), "INDENTSIM_FAULT=increment:7"),
+            128 + SIGKILL);
+  ASSERT_EQ(cli("resume " + (dir_ / "killed" / "checkpoints").string() + " --quiet"), 0) << err();
+  EXPECT_EQ(indentsim::testing::curve_without_timing(dir_ / "killed" / "curve.csv"),
+            indentsim::testing::curve_without_timing(dir_ / "full" / "curve.csv"));
+}
