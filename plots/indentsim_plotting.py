@@ -294,14 +294,112 @@ def is_axisymmetric(case):
 
 def yield_stress(case, summary=None):
     """σ_y [Pa]: summary.json's, or the case's, or 3 μ e0 (the uniaxial stress at e_u = e0)."""
-    material = case.get("material", {})
-    if summary and summary.get("material", {}).get("yield_stress"):
-        return float(summary["material"]["yield_stress"])
+    return material_yield_stress(case.get("material", {}), (summary or {}).get("material"))
+
+
+def material_yield_stress(material, written=None):
+    """σ_y [Pa] of one material block: `written`'s (summary.json's block of it), or the case's, or
+    3 μ e0 (the uniaxial stress at e_u = e0)."""
+    if written and written.get("yield_stress"):
+        return float(written["yield_stress"])
     if material.get("yield_stress"):
         return float(material["yield_stress"])
     if material.get("e0") and material.get("E"):
         return 3 * material["E"] / (2 * (1 + material.get("nu", 0.3))) * material["e0"]
     return None
+
+
+# --- Coated specimens: the layers over the substrate (docs/MODEL.md §14) -------------------------
+
+def layers_of(case, summary=None):
+    """The coating's layers, from the surface down, as summary.json lists them: [{thickness,
+    top_depth, bottom_depth, model, material}] (depths [m] below the undeformed surface; material
+    the block of [material]'s keys, with e0 and the yield stress where summary.json gives them);
+    from the case's [[layer]] tables when summary.json has none (an older run, a sweep's case).
+    [] for a homogeneous specimen."""
+    written = (summary or {}).get("layers") or []
+    tables = case.get("layer") or []
+    if not written and not tables:
+        return []
+    out, top = [], 0.0
+    for k in range(max(len(written), len(tables))):
+        w = written[k] if k < len(written) else {}
+        t = tables[k] if k < len(tables) else {}
+        material = dict(t.get("material", {}))
+        material.update(w.get("material", {}))
+        material.setdefault("model", w.get("model", material.get("model", "elastic")))
+        thickness = float(w.get("thickness", t.get("thickness", 0.0)))
+        out.append({"thickness": thickness, "top_depth": float(w.get("top_depth", top)),
+                    "bottom_depth": float(w.get("bottom_depth", top + thickness)),
+                    "model": w.get("model", material["model"]), "material": material})
+        top += thickness
+    return out
+
+
+def region_materials(case, summary=None):
+    """The material block of each region, as the fields' `region` cell array numbers them: [0] the
+    substrate (summary.json's block over the case's), [k] layer k from the surface; each with its
+    "model"."""
+    substrate = dict(case.get("material", {}))
+    substrate.update((summary or {}).get("material", {}))
+    substrate["model"] = (summary or {}).get("model", substrate.get("model", "elastic"))
+    return [substrate] + [layer["material"] for layer in layers_of(case, summary)]
+
+
+def region_names(count):
+    """What the figures call the regions: [0] "substrate", then "film" for a single layer, else
+    "layer 1" (at the surface), "layer 2", ..."""
+    if count <= 1:
+        return ["specimen"]
+    if count == 2:
+        return ["substrate", "film"]
+    return ["substrate"] + [f"layer {k}" for k in range(1, count)]
+
+
+def e_star(material):
+    """The plane-strain modulus E/(1 - ν²) [Pa] of a material block."""
+    return material["E"] / (1 - material.get("nu", 0.3) ** 2)
+
+
+MODEL_WORDS = {"j2": "J2", "ilyushin": "Ilyushin", "elastic": "elastic"}
+
+
+def layer_words(layer, k, omit=()):
+    """ "1 µm J2 (σ_y = 12 GPa)": layer k (from 1 at the surface) in a few words, its material by
+    the number that decides its response (elastic: E and ν; Norton: σ_ref; else σ_y)."""
+    m = layer["material"]
+    prefix = f"layer.{k}.material."
+    model = m.get("model", layer.get("model", "elastic"))
+    t = layer["thickness"]
+    thickness = "" if f"layer.{k}.thickness" in omit else f"{length_unit(t).text(t, 3)} "
+    words = []
+    if model == "elastic":
+        if m.get("E") and prefix + "E" not in omit:
+            words.append(f"E = {stress_unit(m['E']).text(m['E'], 3)}")
+        if prefix + "nu" not in omit:
+            words.append(f"ν = {number(m.get('nu', 0.3), 3)}")
+    elif m.get("rate") == "norton":
+        reference = m.get("reference_stress", 0.0)
+        if prefix + "reference_stress" not in omit:
+            words.append(f"Norton, σ$_{{ref}}$ = {stress_unit(reference).text(reference, 3)}")
+    else:
+        sy = material_yield_stress(m)
+        if sy and not {prefix + key for key in ("yield_stress", "e0", "E", "nu")} & set(omit):
+            words.append(f"σ$_y$ = {stress_unit(sy).text(sy, 3)}")
+    return thickness, MODEL_WORDS.get(model, model), (f" ({', '.join(words)})" if words else "")
+
+
+def coating_words(case, summary=None, omit=()):
+    """ "1 µm J2 coating (σ_y = 12 GPa)"; several layers: "coating of 0.2 µm elastic (E = 400 GPa,
+    ν = 0.25) over 1 µm J2 (σ_y = 3 GPa)", from the surface down; "" for a homogeneous specimen."""
+    layers = layers_of(case, summary)
+    if not layers:
+        return ""
+    parts = [layer_words(layer, k, omit) for k, layer in enumerate(layers, start=1)]
+    if len(parts) == 1:
+        thickness, model, words = parts[0]
+        return f"{thickness}{model} coating{words}"
+    return "coating of " + " over ".join(f"{t}{m}{w}" for t, m, w in parts)
 
 
 def indenter_words(case, omit=()):
@@ -375,9 +473,12 @@ def material_words(case, summary=None, omit=()):
 
 
 def describe_run(case, summary=None, omit=()):
-    """One line: the indenter, the specimen's material, the scene."""
+    """One line: the indenter, the specimen's material (a coated one's: its coating on the
+    substrate's material), the scene."""
     scene = "axisymmetric" if is_axisymmetric(case) else "plane strain"
-    return f"{indenter_words(case, omit)}; {material_words(case, summary, omit)}; {scene}"
+    coating = coating_words(case, summary, omit)
+    specimen = f"{coating} on {material_words(case, summary, omit)}" if coating else material_words(case, summary, omit)
+    return f"{indenter_words(case, omit)}; {specimen}; {scene}"
 
 
 # --- The load-depth curve --------------------------------------------------------------------------
@@ -606,9 +707,27 @@ KEY_WORDS = {  # key: (words, symbol, kind of unit: "stress", "length", "degree"
 }
 
 
+def key_words(key):
+    """(words, symbol, kind of unit) of a load-case key (KEY_WORDS), a coating's keys included:
+    layer.K.material.KEY is the [material] key's, of "layer K" (K from 1 at the surface), and
+    layer.K.thickness its thickness t_K; None for a key it does not know."""
+    if key in KEY_WORDS:
+        return KEY_WORDS[key]
+    parts = key.split(".")
+    if len(parts) >= 3 and parts[0] == "layer" and parts[1].isdigit():
+        k = parts[1]
+        if parts[2:] == ["thickness"]:
+            return (f"layer {k} thickness", f"$t_{{{k}}}$", "length")
+        inner = ".".join(["material"] + parts[3:]) if parts[2] == "material" else None
+        if inner in KEY_WORDS:
+            words, symbol, kind = KEY_WORDS[inner]
+            return (f"layer {k} {words}", f"{symbol} (layer {k})", kind)
+    return None
+
+
 def key_unit(key, value):
     """The unit of a load-case key's values of about this size."""
-    kind = KEY_WORDS.get(key, ("", "", None))[2]
+    kind = (key_words(key) or ("", "", None))[2]
     if kind == "stress":
         return stress_unit(value)
     if kind == "length":
@@ -624,14 +743,14 @@ def key_unit(key, value):
 
 def key_axis(key, values):
     """(axis label, Unit) of a key's values: "yield stress σ_y [MPa]"."""
-    words, symbol, _ = KEY_WORDS.get(key, (key, "", None))
+    words, symbol, _ = key_words(key) or (key, "", None)
     unit = key_unit(key, max((abs(v) for v in values), default=1.0))
     label = f"{words} {symbol}".strip()
     return (f"{label} [{unit.name}]" if unit.name else label), unit
 
 
 def key_symbol(key):
-    return KEY_WORDS[key][1] if key in KEY_WORDS else key
+    return key_words(key)[1] if key_words(key) else key
 
 
 def key_value_text(key, text, digits=3):

@@ -23,6 +23,14 @@ and SVG files in DIR/figures/:
 and, when `indentsim analyze DIR` has written DIR/analysis.json, analysis.png beside it.  Units are
 chosen once per run from its scale (indentsim_plotting.RunUnits) and shared by every figure.
 
+A coated specimen (summary.json's `layers`, the fields' `region`; docs/MODEL.md §14): the titles
+name the coating on the substrate; plastic_zone divides each element's e_u by its own region's e0,
+outlines each region's own yield on its own nodes, hatches an elastic layer (it never yields) and
+draws every interface, displaced; the Hertz or Sneddon references of curve and pressure are the
+film's half-space (solid) and the substrate's (grey, dotted) -- a coated specimen has no closed
+form; profiles names the region of each line; analysis says which ν its E is through (the top
+layer's); sweep draws the film's and the substrate's E/(1-ν²).
+
 A sweep's folder (results.csv, and manifest.json, `indentsim sweep`): DIR/figures/sweep.png and
 .svg: hardness H, reduced modulus E_r and the pile-up ratio A_true/A_c against the swept
 parameter (one line per value of a second swept parameter).
@@ -56,6 +64,7 @@ from matplotlib import patheffects  # noqa: E402
 from matplotlib.collections import PolyCollection  # noqa: E402
 from matplotlib.colors import LogNorm, Normalize  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
+from matplotlib.patches import Patch, Polygon  # noqa: E402
 
 read_csv = ip.read_csv
 
@@ -64,37 +73,60 @@ class Scene:
     """What the figures need of the scene: the punch's shape and the theory for it.
 
     Plane strain: Hertz line contact for the cylinder.  Axisymmetry: Hertz for the sphere, Sneddon
-    for the cone.  Other shapes have no closed form: their figures show indentsim alone."""
+    for the cone.  Other shapes have no closed form: their figures show indentsim alone.
 
-    def __init__(self, case):
+    A coated specimen (docs/MODEL.md §14) has no closed form either: `theory` is then the
+    homogeneous theory with the surface layer's E* (the film alone, which the contact feels first),
+    and `references` holds it and the substrate's (the substrate alone), each named by its region,
+    so that a figure draws the two half-spaces between which the coated one lies."""
+
+    def __init__(self, case, summary=None):
         self.axisymmetric = ip.is_axisymmetric(case)
         self.punch = case["punch"]
         self.shape = self.punch.get("shape", "sphere")
+        self.materials = ip.region_materials(case, summary)  # [0] the substrate, [k] layer k from the surface
+        self.coated = len(self.materials) > 1
+        self.region_names = ip.region_names(len(self.materials))
+        self.elastic = all(m.get("model", "elastic") == "elastic" for m in self.materials)
         self.e_star = case["material"]["E"] / (1 - case["material"]["nu"] ** 2)
+        if self.coated:  # the surface layer's, as the contact estimates of the run (MODEL.md §14.1)
+            self.e_star = ip.e_star(self.materials[1])
         self.r = "r" if self.axisymmetric else "x"
         self.width_name = "contact radius $a$" if self.axisymmetric else "contact half-width $a$"
+        self.theory = self.theory_for(self.e_star)
+        # (words for the legend, theory, main) of each half-space a figure draws.
+        self.references = [("", self.theory, True)] if self.theory is not None else []
+        if self.coated and self.theory is not None and self.shape != "flat":  # flat: p(r) holds no E*
+            substrate = ip.e_star(self.materials[0])
+            self.references = [
+                (f", the {self.region_names[1]} alone ($E^*$ = {ip.stress_unit(self.e_star).text(self.e_star, 3)})",
+                 self.theory, True),
+                (f", the substrate alone ($E^*$ = {ip.stress_unit(substrate).text(substrate, 3)})",
+                 self.theory_for(substrate), False)]
+
+    def theory_for(self, e_star):
+        """(name, P(a), a(P), p(x; a, P)) of the theory for this scene and a half-space of
+        plane-strain modulus e_star, or None."""
         cot = 1 / math.tan(math.radians(self.punch.get("half_angle", 45.0)))
         sharp_cone = self.shape == "cone" and self.punch.get("tip_radius", 0.0) == 0.0
         r = self.punch.get("radius", 0.0)
-        # (name, P(a), a(P), p(x; a, P)) of the theory for this scene, or None.
         if self.shape == "sphere" and not self.axisymmetric:
-            self.theory = ("Hertz line contact", lambda a: math.pi * self.e_star * a * a / (4 * r),
-                           lambda p: math.sqrt(4 * p * r / (math.pi * self.e_star)),
-                           lambda x, a, p: 2 * p / (math.pi * a) * math.sqrt(max(0.0, 1 - (x / a) ** 2)))
-        elif self.shape == "sphere":
-            self.theory = ("Hertz", lambda a: 4 * self.e_star * a**3 / (3 * r),
-                           lambda p: (3 * p * r / (4 * self.e_star)) ** (1 / 3),
-                           lambda x, a, p: 3 * p / (2 * math.pi * a * a) * math.sqrt(max(0.0, 1 - (x / a) ** 2)))
-        elif sharp_cone and self.axisymmetric:
-            self.theory = ("Sneddon", lambda a: math.pi * a * a * self.e_star * cot / 2,
-                           lambda p: math.sqrt(2 * p / (math.pi * self.e_star * cot)),
-                           lambda x, a, p: self.e_star * cot / 2 * math.acosh(a / x) if 0 < x < a else 0.0)
-        elif self.shape == "flat" and self.axisymmetric:
+            return ("Hertz line contact", lambda a: math.pi * e_star * a * a / (4 * r),
+                    lambda p: math.sqrt(4 * p * r / (math.pi * e_star)),
+                    lambda x, a, p: 2 * p / (math.pi * a) * math.sqrt(max(0.0, 1 - (x / a) ** 2)))
+        if self.shape == "sphere":
+            return ("Hertz", lambda a: 4 * e_star * a**3 / (3 * r),
+                    lambda p: (3 * p * r / (4 * e_star)) ** (1 / 3),
+                    lambda x, a, p: 3 * p / (2 * math.pi * a * a) * math.sqrt(max(0.0, 1 - (x / a) ** 2)))
+        if sharp_cone and self.axisymmetric:
+            return ("Sneddon", lambda a: math.pi * a * a * e_star * cot / 2,
+                    lambda p: math.sqrt(2 * p / (math.pi * e_star * cot)),
+                    lambda x, a, p: e_star * cot / 2 * math.acosh(a / x) if 0 < x < a else 0.0)
+        if self.shape == "flat" and self.axisymmetric:
             # Sneddon's flat punch: the contact is the face, a = R; p = P / (2 pi a sqrt(a^2 - r^2)).
-            self.theory = ("Sneddon", None, lambda p: r,
-                           lambda x, a, p: p / (2 * math.pi * a * math.sqrt(a * a - x * x)) if x < a else 0.0)
-        else:
-            self.theory = None
+            return ("Sneddon", None, lambda p: r,
+                    lambda x, a, p: p / (2 * math.pi * a * math.sqrt(a * a - x * x)) if x < a else 0.0)
+        return None
 
     def contact_area(self, a):
         """The projected contact area (axisymmetric) or width 2a (plane strain, per unit thickness)."""
@@ -155,8 +187,8 @@ def column_of(rows, name, default=0.0):
 # --- curve.png ------------------------------------------------------------------------------------
 
 def plot_curve(case, summary, curve, units, size, outdir, measured=None):
-    scene = Scene(case)
-    elastic = case["material"]["model"] == "elastic" and scene.theory is not None and scene.theory[1] is not None
+    scene = Scene(case, summary)
+    elastic = scene.elastic and scene.theory is not None and scene.theory[1] is not None
     depth, force = column_of(curve, "alpha"), column_of(curve, "P")
     nodes = column_of(curve, "contact_nodes", 1.0) if "contact_nodes" in curve[0] else None
     # The legend's entries: the kinds of branch, separated rows, the peak, the error band, S, h_f.
@@ -212,12 +244,13 @@ def plot_curve(case, summary, curve, units, size, outdir, measured=None):
     else:
         ip.legend(ax, size, strip=strip, loc="upper left")
     if elastic:
-        theory_name, force_of_a = scene.theory[0], scene.theory[1]
         ax = axes[1]
         a = column_of(curve, "a")
         a_line = np.linspace(0, a.max(), 101)
-        ax.plot(units.position(a_line), units.force(np.array([force_of_a(x) for x in a_line])), "-", color=ip.THEORY,
-                label=theory_name)
+        # A coated specimen: the film's half-space and the substrate's (MODEL.md §14; no closed form).
+        for words, (theory_name, force_of_a, _, _), main in scene.references:
+            ax.plot(units.position(a_line), units.force(np.array([force_of_a(x) for x in a_line])),
+                    "-" if main else ":", color=ip.THEORY if main else "#666666", label=theory_name + words)
         ax.plot(units.position(a), units.force(force), "o", color=ip.LOADING, label="indentsim")
         ax.set_xlabel(f"{scene.width_name} [{units.position.name}]")
         ax.set_ylabel(units.force_axis())
@@ -232,7 +265,7 @@ def plot_curve(case, summary, curve, units, size, outdir, measured=None):
 def plot_pressure(case, summary, row, profiles, surface_from_vtu, units, size, outdir):
     force = float(row["P"])
     a = float(row["a"])
-    scene = Scene(case)
+    scene = Scene(case, summary)
     if profiles:
         top = max(int(r["line"]) for r in profiles)
         surface = [(float(r["x"]), -float(r["sigmaN_layer"])) for r in profiles if int(r["line"]) == top]
@@ -245,17 +278,24 @@ def plot_pressure(case, summary, row, profiles, surface_from_vtu, units, size, o
     shown = [(x, p) for x, p in surface if x <= reach]
     ax.plot(units.position(np.array([x for x, _ in shown])), units.stress(np.array([p for _, p in shown])), "o-",
             color=ip.LOADING, lw=plt.rcParams["lines.linewidth"] * 0.6, label=source, zorder=3)
-    if force > 0 and scene.theory is not None:
-        # The elastic theory for the same force; for a plastic run a reference (dashed).
-        elastic = case["material"]["model"] == "elastic"
-        theory_name, _, a_of_force, pressure = scene.theory
+    # The elastic theory for the same force; for a plastic run a reference (dashed).  A coated
+    # specimen has none: the film's half-space and the substrate's (Scene.references), the
+    # substrate's grey and dotted, both left out with the film's.
+    for words, (theory_name, _, a_of_force, pressure), main in (scene.references if force > 0 else []):
+        elastic = scene.elastic
         a_t = a_of_force(force)
         grid = np.linspace(a_t / 400, a_t * (0.98 if scene.shape == "flat" else 1.0), 400)  # flat: singular at a
         theory = np.array([pressure(x, a_t, force) for x in grid])
         computed = max((p for _, p in shown), default=0.0)
         if elastic or theory.max() <= 2 * computed:  # a reference far off the plastic pressure: left out
-            ax.plot(units.position(grid), units.stress(theory), "-" if elastic else "--", color=ip.THEORY,
-                    label=f"{theory_name}, same $P$" + ("" if elastic else " (elastic, for reference)"))
+            ax.plot(units.position(grid), units.stress(theory), ("-" if elastic else "--") if main else ":",
+                    color=ip.THEORY if main else "#666666",
+                    label=f"{theory_name}{words}, same $P$" + ("" if elastic else " (elastic, for reference)"))
+        elif scene.coated:  # the film's left out: the substrate's too, and the legend says why (room above)
+            ax.plot([], [], " ", label=f"{theory_name} left out: the {scene.region_names[1]} alone would peak at "
+                                       f"{units.stress.text(theory.max())}")
+            ax.set_ylim(0, 1.45 * units.stress(computed))
+            break
     if a > 0:
         ax.axvline(units.position(a), color="#666666", ls=":", lw=1.2,
                    label=f"{scene.width_name} = {units.position.text(a)}")
@@ -273,8 +313,27 @@ def plot_pressure(case, summary, row, profiles, surface_from_vtu, units, size, o
 
 # --- profiles.png ---------------------------------------------------------------------------------
 
+def region_at_depth(case, summary, depth):
+    """The region's name ("film", "substrate", "layer 2", ...) at a depth [m] below the undeformed
+    surface of a coated specimen, or the interface's ("film / substrate interface": its nodal
+    values are the layer above's, MODEL.md §14.1; σ_zz and the shear, which the profiles show, are
+    continuous across it); None for a homogeneous specimen."""
+    layers = ip.layers_of(case, summary)
+    if not layers:
+        return None
+    names = ip.region_names(len(layers) + 1)
+    for k, layer in enumerate(layers, start=1):
+        bottom = layer["bottom_depth"]
+        if abs(depth - bottom) <= 1e-6 * bottom:
+            below = names[k + 1] if k + 1 < len(names) else names[0]
+            return f"{names[k]} / {below} interface"
+        if depth < bottom:
+            return names[k]
+    return names[0]
+
+
 def plot_profiles(case, summary, row, profiles, units, size, outdir):
-    scene = Scene(case)
+    scene = Scene(case, summary)
     a = float(row["a"])
     reach = 3 * max(a, 1e-300)
     lines = sorted({int(r["line"]) for r in profiles}, reverse=True)
@@ -288,8 +347,10 @@ def plot_profiles(case, summary, row, profiles, units, size, outdir):
         rows = [r for r in profiles if int(r["line"]) == line and float(r["x"]) <= reach]
         depth = -float(rows[0]["y"])
         c = colours[n % len(colours)]
+        region = region_at_depth(case, summary, depth)
         handles.append(Line2D([], [], color=c,
-                              label="surface" if depth == 0 else f"$z$ = −{units.position.text(depth)}"))
+                              label=("surface" if depth == 0 else f"$z$ = −{units.position.text(depth)}") +
+                              (f" ({region})" if region else "")))
         x = units.position(column_of(rows, "x"))
         for ax, layer, nodal in ((axes[0], "sigmaN_layer", "sigma22_nodal"),
                                  (axes[1], "sigmaT_layer", "sigma12_nodal")):
@@ -358,9 +419,13 @@ def read_vtu(path):
         plastic_points = array("CellData", "plastic_points")
     except KeyError:  # an older run's fields: the flag alone
         plastic_points = 4.0 * plastic
+    try:  # the material region of each cell: 0 the substrate, k layer k from the surface
+        region = array("CellData", "region").astype(int)
+    except KeyError:  # a run from before coated specimens: one region
+        region = np.zeros(len(quads), int)
     return {"xy": points, "deformed": points + u, "quads": quads, "e_u": array("CellData", "strain_intensity"),
             "e_u_nodal": array("PointData", "strain_intensity"), "plastic": plastic,
-            "plastic_points": plastic_points, "surface_pressure": surface}
+            "plastic_points": plastic_points, "region": region, "surface_pressure": surface}
 
 
 def structured(xy):
@@ -377,37 +442,93 @@ def nodal_average(quads, cell_values, nodes):
     return total / np.maximum(count, 1)
 
 
+def region_bands(quads, region, ny, regions):
+    """The node rows (lo, hi) of each region's band (its elements lie between node rows lo and hi;
+    node n = i * ny + j), from the cells' regions; None for a region without elements."""
+    rows = quads.min(axis=1) % ny
+    bands = []
+    for r in range(regions):
+        mine = rows[region == r]
+        bands.append((int(mine.min()), int(mine.max()) + 1) if len(mine) else None)
+    return bands
+
+
+def region_nodal(fields, r, band, ny):
+    """(e_u, yielded fraction) at the nodes of region r's band, (nx, rows): the fields' nodal e_u
+    (Gauss points extrapolated and averaged within the region), except on the band's top row when
+    a region lies above it -- the interface's nodal values are that region's side (MODEL.md §14.1)
+    -- where it is the mean of this region's own elements beside the node (no extrapolation, so
+    half an element smoother there).  The yielded fraction: plastic Gauss points / 4 of the
+    region's own elements, averaged to the nodes."""
+    xy, quads = fields["xy"], fields["quads"]
+    nx = len(xy) // ny
+    lo, hi = band
+    mine = fields["region"] == r
+    e_u = fields["e_u_nodal"].reshape(nx, ny)[:, lo:hi + 1].copy()
+    if hi < ny - 1:
+        e_u[:, -1] = nodal_average(quads[mine], fields["e_u"][mine], len(xy)).reshape(nx, ny)[:, hi]
+    yielded = nodal_average(quads[mine], fields["plastic_points"][mine] / 4.0, len(xy)).reshape(nx, ny)[:, lo:hi + 1]
+    return e_u, yielded
+
+
 def plot_plastic_zone(case, summary, row, fields, units, size, outdir, deepest=None):
     """`deepest`: the deepest depth reached up to the state shown; below it the state is unloaded
     (J2: the region that has yielded is then drawn too; at the deepest state it is the region
-    e_u >= e0)."""
+    e_u >= e0).
+
+    A coated specimen (docs/MODEL.md §14): each element's e_u is divided by its own region's e0
+    (summary.json: the substrate's `material.e0`, layer k's `layers[k-1].material.e0`), and the
+    outline e_u = e0 is contoured region by region on that region's own nodal values, so that it
+    is each region's own yield (it ends at an interface; the interface is drawn).  An elastic
+    region never yields: it is coloured by e_u over the e0 of its material block (0.027 unless the
+    case set one: a scale, not a yield), hatched, with no outline (that e0 is no yield of the run);
+    a coated specimen whose every region is elastic is drawn as an elastic run is: each region's
+    e_u = e0 dashed, "where a plastic law would yield".  A region without an e0 (Norton creep)
+    leaves the colour unnormalised (e_u) for the whole figure.  The interfaces are drawn as the
+    rows of nodes they are, displaced."""
     unloaded = deepest is not None and float(row["alpha"]) < deepest
     xy, deformed, quads = fields["xy"], fields["deformed"], fields["quads"]
-    scene = Scene(case)
-    model = case["material"]["model"]
+    scene = Scene(case, summary)
+    materials, names, coated = scene.materials, scene.region_names, scene.coated
+    regions = max(len(materials), int(fields["region"].max()) + 1)
+    names = ip.region_names(regions) if regions > len(materials) else names
+    models = [(materials[r] if r < len(materials) else {}).get("model", "elastic") for r in range(regions)]
     # e0: the case's, or sigma_y / (3 mu) of a flow-curve law (swift, table) that states no e0.
     e0 = summary.get("material", {}).get("e0") if summary else None
-    e0 = e0 or case["material"].get("e0")
-    scale = e0 if e0 else 1.0
+    e0s = [e0 or case["material"].get("e0")] + [(materials[r] if r < len(materials) else {}).get("e0")
+                                                for r in range(1, regions)]
+    normalised = all(e0s)
+    scales = np.array([e if normalised else 1.0 for e in e0s])
     a = max(float(row["a"]), 1e-300)
     nx, ny = structured(xy)
     grid = lambda v: v.reshape(nx, ny)  # noqa: E731
-    ratio_nodal = fields["e_u_nodal"] / scale
-    yielded_fraction = nodal_average(quads, fields["plastic_points"] / 4.0, len(xy))
+    bands = region_bands(quads, fields["region"], ny, regions)
+    # Each region's nodal e_u/e0 and yielded fraction on its own band of node rows.
+    nodal = [None if band is None else region_nodal(fields, r, band, ny) for r, band in enumerate(bands)]
+    ratios = [None if n is None else n[0] / (e0s[r] if e0s[r] else 1.0) for r, n in enumerate(nodal)]
     # The window follows the zone: the contact and where e_u >= e0 or the material has yielded.
-    zone = (ratio_nodal >= 1.0) | (yielded_fraction >= 0.5)
+    zone = np.zeros((nx, ny), bool)
+    for reg, (band, ratio, n) in enumerate(zip(bands, ratios, nodal)):
+        if band is not None and not (models[reg] == "elastic" and not all(m == "elastic" for m in models)):
+            zone[:, band[0]:band[1] + 1] |= (ratio >= 1.0) | (n[1] >= 0.5)
+    zone = zone.ravel()
     reach = max([a] + np.abs(xy[zone]).max(axis=1).tolist()) if zone.any() else a
     window = 1.3 * reach if zone.any() else 3 * a
     keep = [q for q in range(len(quads))
             if xy[quads[q], 0].min() <= window and xy[quads[q], 1].max() >= -window]
-    values = fields["e_u"][keep] / scale
+    values = (fields["e_u"] / scales[fields["region"]])[keep]
     positive = values[values > 0]
     vmax = float(values.max()) if len(values) else 1.0
     # A field the tip dominates (its maximum ten times the median, as under a cone or deep in the
     # plastic range) on a logarithmic scale over three decades; else linear from 0.
     log = len(positive) > 0 and (vmax > 10 * float(np.median(positive)) or vmax > 10)
     norm = LogNorm(vmin=max(float(positive.min()), vmax * 1e-3), vmax=vmax) if log else Normalize(vmin=0, vmax=vmax)
-    fig, axes = ip.figure(size)
+    strip = None
+    if coated and size == "column":  # a coated specimen's longer legend in a strip below the panel
+        entries = 5 + 2 * (regions - 1) + unloaded
+        fig, axes, strip = ip.figure(size, legend_row=ip.legend_height(entries, size))
+    else:
+        fig, axes = ip.figure(size)
     ax = axes[0]
     polys = np.array([units.position(deformed[quads[q]]) for q in keep])
     mirrored = polys.copy()
@@ -415,13 +536,17 @@ def plot_plastic_zone(case, summary, row, fields, units, size, outdir, deepest=N
     cells = PolyCollection(np.concatenate([polys, mirrored]), array=np.concatenate([values, values]),
                            cmap="viridis", norm=norm, edgecolors="face", linewidths=0.3, antialiased=False)
     ax.add_collection(cells)
-    what = "e$_u$/e$_0$" if e0 else "e$_u$"
+    what = "e$_u$/e$_0$" if normalised else "e$_u$"
     # Where the maximum is: the centre of its element (deformed), named in the colour bar's label.
     top = keep[int(np.argmax(values))]
     cx, cz = units.position(deformed[quads[top]].mean(axis=0))
     r = "r" if scene.axisymmetric else "x"
     where = f"{r} = {ip.number(abs(cx), 2)}, z = {ip.number(cz, 2)} {units.position.name}"
-    if size == "slide":
+    if size == "slide" and coated:  # each element over its own region's e0 (the legend names them)
+        label = f"strain intensity {'e$_u$ / its region’s e$_0$' if normalised else what}\n" + \
+            ("log scale; " if log else "") + f"max {ip.number(vmax, 3)} in the {names[fields['region'][top]]}" + \
+            f"\nat {where}"
+    elif size == "slide":
         label = f"strain intensity {what}" + (", log scale" if log else "") + \
             f"\n(max {ip.number(vmax, 3)} at {where})"
     else:
@@ -432,27 +557,82 @@ def plot_plastic_zone(case, summary, row, fields, units, size, outdir, deepest=N
     if log:
         bar.ax.yaxis.set_major_formatter(plt.FuncFormatter(lambda v, _: ip.number(v, 3)))
     # The yield outline: e_u = e0 on the nodal field (Gauss-point values extrapolated and averaged),
-    # contoured on the deformed mesh, both halves.
+    # contoured on the deformed mesh, both halves; region by region, each on its own band.
     X, Y = grid(units.position(deformed[:, 0])), grid(units.position(deformed[:, 1]))
     handles = []
     lw = plt.rcParams["lines.linewidth"]
     outline = [patheffects.withStroke(linewidth=lw * 1.6, foreground="black")]
-    if e0 and ratio_nodal.max() >= 1.0:
-        style = "--" if model == "elastic" else "-"
+    all_elastic = all(m == "elastic" for m in models)
+    top_down = list(range(1, regions)) + [0]  # the regions from the surface down: layer 1, 2, ..., the substrate
+    drawn = set()  # "yield", "elastic": the kinds of outline drawn
+    plastic_names = [names[reg] for reg in top_down if models[reg] != "elastic"]
+    for reg in top_down:  # from the surface down
+        band, ratio = bands[reg], ratios[reg]
+        if band is None or not e0s[reg] or ratio.max() < 1.0:
+            continue
+        elastic_region = models[reg] == "elastic"
+        if coated and elastic_region and not all_elastic:
+            continue  # its e0 is its block's (0.027 unless set), no yield: the colour's scale only
+        style = "--" if elastic_region else "-"
+        rows = slice(band[0], band[1] + 1)
         for sign in (1, -1):
-            contour = ax.contour(sign * X, Y, grid(ratio_nodal), levels=[1.0], colors="white", linewidths=lw * 0.9,
-                                 linestyles=style)
+            contour = ax.contour(sign * X[:, rows], Y[:, rows], ratio, levels=[1.0], colors="white",
+                                 linewidths=lw * 0.9, linestyles=style)
             plt.setp(contour.collections, path_effects=outline)
-        handles.append(Line2D([], [], color="white", lw=lw * 0.9, ls=style, path_effects=outline,
-                              label="e$_u$ = e$_0$" + (": where a plastic law would yield" if model == "elastic"
-                                                       else "" if unloaded else " (yield)")))
-    if model == "j2" and unloaded and yielded_fraction.max() >= 0.5:
+        if not coated:
+            handles.append(Line2D([], [], color="white", lw=lw * 0.9, ls=style, path_effects=outline,
+                                  label="e$_u$ = e$_0$" + (": where a plastic law would yield" if elastic_region
+                                                           else "" if unloaded else " (yield)")))
+        elif ("elastic" if elastic_region else "yield") not in drawn:
+            drawn.add("elastic" if elastic_region else "yield")
+            whose = "each region's" if len(plastic_names) != 1 else f"the {plastic_names[0]}'s"
+            handles.append(Line2D([], [], color="white", lw=lw * 0.9, ls=style, path_effects=outline,
+                                  label="e$_u$ = e$_0$" + (" of each region: where a plastic law would yield"
+                                                           if elastic_region else f" ({whose} e$_0$)" if unloaded
+                                                           else f" ({whose} yield)")))
+    # An elastic region of a coated specimen with a plastic one: hatched (it never yields).
+    D = deformed.reshape(nx, ny, 2)
+    shown = [i for i in range(nx) if i == 0 or xy[(i - 1) * ny, 0] <= window]  # the window and one column more
+    for reg in top_down:
+        if not coated or all_elastic or models[reg] != "elastic" or bands[reg] is None:
+            continue
+        lo, hi = bands[reg]
+        upper, lower = units.position(D[shown, hi]), units.position(D[shown, lo])
+        flip = np.array([-1.0, 1.0])
+        polygon = np.concatenate([upper[::-1] * flip, upper, lower[::-1], lower * flip])
+        ax.add_patch(Polygon(polygon, closed=True, fill=False, hatch="//", edgecolor=(1, 1, 1, 0.55), lw=0,
+                             zorder=2.5))
+        handles.append(Patch(fill=False, hatch="//", edgecolor="#777777", lw=0,
+                             label=f"elastic {names[reg]} (never yields)"))
+    yielded_drawn = False
+    for reg in top_down:
+        if models[reg] != "j2" or not unloaded or bands[reg] is None or nodal[reg][1].max() < 0.5:
+            continue
+        rows = slice(bands[reg][0], bands[reg][1] + 1)
         for sign in (1, -1):
-            contour = ax.contour(sign * X, Y, grid(yielded_fraction), levels=[0.5], colors=ip.PURPLE,
+            contour = ax.contour(sign * X[:, rows], Y[:, rows], nodal[reg][1], levels=[0.5], colors=ip.PURPLE,
                                  linewidths=lw * 0.8, linestyles="--")
             plt.setp(contour.collections, path_effects=outline)
-        handles.append(Line2D([], [], color=ip.PURPLE, lw=lw * 0.8, ls="--", path_effects=outline,
-                              label="has yielded (plastic strain > 0)"))
+        if not yielded_drawn:
+            handles.append(Line2D([], [], color=ip.PURPLE, lw=lw * 0.8, ls="--", path_effects=outline,
+                                  label="has yielded (plastic strain > 0)"))
+            yielded_drawn = True
+    # The interfaces: each a row of nodes, followed where it has moved (MODEL.md §14.3).
+    halo = [patheffects.withStroke(linewidth=lw * 1.5, foreground="white")]
+    for k, layer in enumerate(ip.layers_of(case, summary) if coated else [], start=1):
+        depth = layer["bottom_depth"]
+        if k < len(bands) and bands[k] is not None:
+            j = bands[k][0]
+        else:  # the fields hold no such region: the node row nearest the interface's depth
+            j = int(np.argmin(np.abs(grid(xy[:, 1])[0] + depth)))
+        line = units.position(D[shown, j])
+        below = names[k + 1] if k + 1 < regions else names[0]
+        style = ["-.", (0, (6, 2, 1, 2, 1, 2)), ":"][(k - 1) % 3]
+        ax.plot(np.concatenate([-line[::-1, 0], line[:, 0]]), np.concatenate([line[::-1, 1], line[:, 1]]),
+                ls=style, color=ip.BLACK, lw=lw, path_effects=halo, zorder=4)
+        handles.append(Line2D([], [], ls=style, color=ip.BLACK, lw=lw, path_effects=halo,
+                              label=f"interface ({names[k]} / {below}), {units.position.text(depth)} deep" +
+                              (" (below the view)" if depth > window * 1.001 else "")))
     h = float(row["alpha"])
     xs = np.linspace(0, window, 400)
     punch = [(x, scene.punch_height(x)) for x in xs if scene.punch_height(x) is not None]
@@ -471,11 +651,27 @@ def plot_plastic_zone(case, summary, row, fields, units, size, outdir, deepest=N
                   (" (deformed mesh, mirrored about the axis)" if size == "slide" else ""))
     ax.set_ylabel(f"$z$ [{units.position.name}] (deformed)")
     count = int(np.count_nonzero(fields["plastic"] > 0))
-    yielded = f"{count} of {len(quads)} elements yielded" if model != "elastic" else "an elastic run, no yield"
-    title = f"{'plastic zone' if model != 'elastic' else 'strain intensity'} at $h$ = {units.depth.text(h)} " \
+    yielded = f"{count} of {len(quads)} elements yielded" if not all_elastic else "an elastic run, no yield"
+    if coated and not all_elastic:
+        yielded += " (" + ", ".join(
+            f"{names[reg]} {int(np.count_nonzero((fields['plastic'] > 0) & (fields['region'] == reg)))}"
+            for reg in top_down if models[reg] != "elastic") + ")"
+    title = f"{'plastic zone' if not all_elastic else 'strain intensity'} at $h$ = {units.depth.text(h)} " \
         f"(step {row['step']}" + \
         (f", unloaded from {units.depth.text(deepest)}" if unloaded else "") + f"): {yielded}"
-    ax.legend(handles=handles, loc="lower left", facecolor="#ffffff", framealpha=0.95)
+    # A coated specimen's legend is titled with each region's e0, the colour's divisor.  (It hides
+    # the left half's lower corner, interfaces included: the right half shows them, mirrored.)
+    divisors = None
+    if coated:
+        divisors = "e$_0$: " + ", ".join(
+            f"{names[reg]} {ip.number(e0s[reg], 3) if e0s[reg] else '–'}" +
+            (" (elastic: a scale)" if e0s[reg] and models[reg] == "elastic" and not all_elastic else "")
+            for reg in top_down)
+        divisors = textwrap.fill(divisors, 44 if size == "slide" else 60, break_long_words=False)
+    if strip is not None:
+        strip.legend(handles=handles, loc="center", frameon=False, title=divisors)
+    else:
+        ax.legend(handles=handles, loc="lower left", facecolor="#ffffff", framealpha=0.95, title=divisors)
     ip.run_title(fig, title, ip.describe_run(case, summary))
     ip.save(fig, outdir, "plastic_zone")
 
@@ -525,6 +721,14 @@ def plot_analysis(path, size):
         nodes = None
         title = f"{pathlib.Path(report['curve']).name}, measured; {ip.indenter_words(case)}; " \
                 f"{'axisymmetric' if axi else 'plane strain'}"
+    # A coated run's E is the whole stack's apparent modulus, through the surface layer's ν
+    # (analysis.json: specimen_nu; MODEL.md §14.1): the table says so.
+    layers = ip.layers_of(case, summary) if run is not None else []
+    e_label = "$E$ (specimen)"
+    if layers:
+        nu = report.get("specimen_nu", layers[0]["material"].get("nu"))
+        e_label = "$E$ (ν$_\\mathrm{film}$" if len(layers) == 1 else "$E$ (ν$_1$"  # layer 1's, at the surface
+        e_label += f" = {ip.number(nu, 3)})" if nu is not None else ")"
     n = max(len(branches), 1)
     slide = size == "slide"
     if slide:
@@ -621,7 +825,7 @@ def plot_analysis(path, size):
                 ("$H$", hardness.text(b["H"], 4)),
                 ("$E_\\mathrm{r}$", "– (plane strain)" if b["E_r"] is None and not axi
                  else ("–" if b["E_r"] is None else modulus.text(b["E_r"], 4))),
-                ("$E$ (specimen)", "–" if b["E"] is None else modulus.text(b["E"], 4)),
+                (e_label, "–" if b["E"] is None else modulus.text(b["E"], 4)),
                 ("$W_\\mathrm{e}/W_\\mathrm{t}$", f"{b['W_e_over_W_t']:.3f}")]
         if b.get("pile_up_ratio") is not None:
             rows += [("$a$ (true contact)", area_unit.text(b["true_contact_radius"], 4)),
@@ -802,14 +1006,22 @@ def plot_sweep(folder, size):
             ax.annotate("pile-up ↑ / sink-in ↓", (0.98, 1.0), xycoords=("axes fraction", "data"), ha="right",
                         va="bottom", color="#555555", fontsize=plt.rcParams["legend.fontsize"], bbox=NOTE_BOX)
         material = base_case.get("material", {})
-        if name.startswith("reduced") and plotted and not {"material.E", "material.nu"} & set(keys) and \
-                material.get("E") and base_case.get("analysis", {}).get("indenter_E") in (None, "rigid"):
-            e_star = material["E"] / (1 - material.get("nu", 0.3) ** 2)
-            ax.axhline(e_star / e_unit.scale, color="#777777", ls=":", lw=1.2)
-            make_room(ax, e_star / e_unit.scale)
-            ax.annotate(f"$E/(1-ν^2)$ = {e_unit.text(e_star)}", (0.98, e_star / e_unit.scale),
-                        xycoords=("axes fraction", "data"), ha="right", va="bottom", color="#555555",
-                        fontsize=plt.rcParams["legend.fontsize"], bbox=NOTE_BOX)
+        # The specimen's E/(1 - nu^2) where no swept key changes it; a coated specimen has none:
+        # the surface layer's and the substrate's, named (its elastic stiffness lies between them;
+        # its Oliver-Pharr E_r need not, as A_c errs by the pile-up or sink-in).
+        layers = ip.layers_of(base_case)
+        references = [("", material, "material.")] if not layers else [
+            (f"{ip.region_names(len(layers) + 1)[1]}: ", layers[0]["material"], "layer.1.material."),
+            ("substrate: ", material, "material.")]
+        for words, m, prefix in references:
+            if name.startswith("reduced") and plotted and not {prefix + "E", prefix + "nu"} & set(keys) and \
+                    m.get("E") and base_case.get("analysis", {}).get("indenter_E") in (None, "rigid"):
+                e_star = m["E"] / (1 - m.get("nu", 0.3) ** 2)
+                ax.axhline(e_star / e_unit.scale, color="#777777", ls=":", lw=1.2)
+                make_room(ax, e_star / e_unit.scale)
+                ax.annotate(f"{words}$E/(1-ν^2)$ = {e_unit.text(e_star)}", (0.98, e_star / e_unit.scale),
+                            xycoords=("axes fraction", "data"), ha="right", va="bottom", color="#555555",
+                            fontsize=plt.rcParams["legend.fontsize"], bbox=NOTE_BOX)
         if not plotted:  # the panel says why it is empty
             ax.text(0.5, 0.5, textwrap.fill(empty.replace("\n", " "), 30), ha="center", va="center",
                     transform=ax.transAxes, color="#555555", fontsize=plt.rcParams["legend.fontsize"])
@@ -841,7 +1053,7 @@ def plot_sweep(folder, size):
     without = sum(1 for r in done if not r["H"])
     if without:
         status += f"; {without} without Oliver-Pharr numbers (results.csv: message)"
-    varied = " × ".join(f"{ip.KEY_WORDS[k][0]} {ip.KEY_WORDS[k][1]}" if k in ip.KEY_WORDS else k for k in keys)
+    varied = " × ".join(f"{ip.key_words(k)[0]} {ip.key_words(k)[1]}" if ip.key_words(k) else k for k in keys)
     ip.run_title(fig, f"sweep over {varied} ({status})",
                  ip.describe_run(base_case, omit=keys) if base_case else "")
     figures = folder / "figures"

@@ -54,7 +54,7 @@ LoadCase sphere(SceneKind scene) {
 
 /// The truth's case with every free parameter moved a factor `factor` (n: towards the bounds' middle).
 LoadCase started_away(LoadCase lc, const std::vector<FreeParameter>& free, double factor) {
-  for (const auto& f : free) set_value(lc.material, f.parameter, value_of(lc.material, f.parameter) * factor);
+  for (const auto& f : free) set_value(lc, f.parameter, value_of(lc, f.parameter) * factor);
   validate(lc);
   return lc;
 }
@@ -67,7 +67,7 @@ int expect_honest(const FitResult& r, const LoadCase& truth, const std::vector<F
   EXPECT_TRUE(r.model_error_estimated);
   int determined = 0;
   for (std::size_t j = 0; j < free.size(); ++j) {
-    const double exact = value_of(truth.material, free[j].parameter);
+    const double exact = value_of(truth, free[j].parameter);
     const ParameterDetermination& pd = r.determination[j];
     const std::string key = key_of(free[j].parameter);
     EXPECT_LE(pd.lower, exact) << key << ": " << pd.verdict;
@@ -241,8 +241,8 @@ TEST(Fit, ConeLoadingCurveAloneCannotSeparateYieldStressFromHardening) {
     const ParameterDetermination& pd = r.determination[j];
     EXPECT_FALSE(pd.determined) << pd.verdict;
     EXPECT_NE(pd.verdict.find("not determined"), std::string::npos) << pd.verdict;
-    EXPECT_LE(pd.lower, value_of(truth.material, problem.free[j].parameter)) << pd.verdict;
-    EXPECT_GE(pd.upper, value_of(truth.material, problem.free[j].parameter)) << pd.verdict;
+    EXPECT_LE(pd.lower, value_of(truth, problem.free[j].parameter)) << pd.verdict;
+    EXPECT_GE(pd.upper, value_of(truth, problem.free[j].parameter)) << pd.verdict;
   }
   EXPECT_TRUE(std::any_of(r.warnings.begin(), r.warnings.end(), [](const std::string& w) {
     return w.find("distinct starts ended at distinct points") != std::string::npos;

@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "indentsim/base/error.hpp"
+#include "indentsim/fitting/fit.hpp"
 #include "indentsim/geometry/mesh.hpp"
 #include "indentsim/input/load_case.hpp"
 #include "indentsim/simulation/simulation.hpp"
@@ -299,6 +300,38 @@ TEST(Layers, BadLayersAreRefusedNamingTheLayerAndTheKey) {
   EXPECT_EQ(refused_key(film, {"layer.1.thickness=0"}), "layer[1].thickness");
   EXPECT_EQ(refused_key(film, {"layer.x.thickness=1"}), "layer.x.thickness");
   EXPECT_EQ(refused_key(film, {"layer.1.material=1"}), "layer.1.material");
+}
+
+TEST(Layers, AFilmsModulusIsFittedFromACoatedCurveWithTheSubstrateKnown) {
+  // docs/MODEL.md §14.5: a 50 um film of 400 GPa on a 200 GPa substrate under a 1 mm sphere
+  // (contact radius 140 um: the substrate carries most of the load), its loading curve made on a
+  // mesh twice as fine with 0.3% noise; the fit frees layer.1.material.E from 250 GPa.
+  LoadCase truth = small_sphere_case(SceneKind::axisymmetric, MaterialModel::elastic, HardeningLaw::linear);
+  truth.mesh.contact_nodes = 20;
+  truth = with_layer(truth, 50e-6, elastic(400e9, 0.25));
+  const RegionParameter film_modulus{MaterialParameter::E, 1};
+  FitProblem problem;
+  problem.free = {FreeParameter(film_modulus, 50e9, 2000e9)};
+  problem.settings.design_experiments = false;
+  std::vector<double> depths;
+  for (int k = 1; k <= 8; ++k) depths.push_back(4e-6 + 2e-6 * k);  // 6 to 20 um: a at least 7 contact nodes
+  LoadCase finer = truth;
+  finer.mesh.contact_nodes *= 2;
+  FitData d = synthetic_data(finer, FitDataKind::force_depth_curve, depths, problem.free, 0.003, 3);
+  d.load_case = truth;
+  set_value(d.load_case, film_modulus, 250e9);
+  problem.data.push_back(d);
+  const FitResult r = fit(problem);
+  const ParameterDetermination& pd = r.determination[0];
+  std::cout << fmt::format("layer.1.material.E = {:.5g} Pa, 95% [{:.5g}, {:.5g}] ({} forward runs; the model's shift "
+                           "{:.3g} Pa, estimated: {}): {}\n",
+                           r.values[0], pd.lower, pd.upper, r.forward_runs, pd.model_shift, r.model_error_estimated,
+                           pd.verdict);
+  EXPECT_TRUE(r.good()) << r.quality;
+  EXPECT_LE(pd.lower, 400e9);
+  EXPECT_GE(pd.upper, 400e9);
+  EXPECT_TRUE(pd.determined);
+  EXPECT_NEAR(r.values[0] / 400e9, 1.0, 0.03);
 }
 
 class LayersCli : public indentsim::testing::CliTest {};

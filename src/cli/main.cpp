@@ -303,15 +303,16 @@ int command_fit(FitCommandLine cl, bool quiet, bool plot) {
       fmt::print(stderr, "no start had reached a successful forward run: no parameters to keep\n");
     } else {
       // The --set options in the keys the case gives (a case with e0 refuses a yield stress).
-      const MaterialInput& given = job.problem.data.front().load_case.material;
-      MaterialInput best = given;
+      const LoadCase& given = job.problem.data.front().load_case;
+      LoadCase best = given;
       for (std::size_t j = 0; j < e.best().size(); ++j) set_value(best, job.problem.free[j].parameter, e.best()[j]);
       std::string values, sets;
       for (std::size_t j = 0; j < e.best().size(); ++j) {
-        const MaterialParameter parameter = job.problem.free[j].parameter;
+        const RegionParameter parameter = job.problem.free[j].parameter;
         values += fmt::format("  {}={:.6g}", key_of(parameter), e.best()[j]);
-        if (parameter == MaterialParameter::yield_stress && !given.yield_stress)
-          sets += fmt::format(" --set material.e0={:.6g}", best.e0);
+        if (parameter.which == MaterialParameter::yield_stress && !given.region_material(parameter.region).yield_stress)
+          sets += fmt::format(" --set {}={:.6g}", key_of(RegionParameter{MaterialParameter::e0, parameter.region}),
+                              best.region_material(parameter.region).e0);
         else
           sets += fmt::format(" --set {}={:.6g}", key_of(parameter), e.best()[j]);
       }

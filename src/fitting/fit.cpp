@@ -353,51 +353,61 @@ void check_problem(const FitProblem& problem) {
                                    peak, si_force_unit(d)));
   }
   const LoadCase& first = problem.data.front().load_case;
-  std::set<MaterialParameter> seen;
+  std::set<RegionParameter> seen;
   std::size_t points = 0;
   for (const auto& d : problem.data) points += d.values.size();
   for (const auto& f : problem.free) {
     const std::string key = key_of(f.parameter);
-    const std::string unit = unit_suffix(f.parameter);
+    // A layer's key has the declared interval and magnitudes of [material]'s.
+    const std::string declared_key = key_of(f.parameter.which);
+    const MaterialParameter which = f.parameter.which;
+    const std::string unit = unit_suffix(which);
+    // Every data set's case has the layer (the fit frees one parameter of all of them).
+    for (const auto& d : problem.data)
+      if (f.parameter.region > d.load_case.layers.size())
+        throw InputError(d.load_case.source, key,
+                         fmt::format("names layer {}, but the case has {} layer(s) ([[layer]] tables)", f.parameter.region,
+                                     d.load_case.layers.size()));
     if (!seen.insert(f.parameter).second) throw InputError("fit", key, "is listed twice among the free parameters");
-    if ((f.parameter == MaterialParameter::e0 && seen.count(MaterialParameter::yield_stress)) ||
-        (f.parameter == MaterialParameter::yield_stress && seen.count(MaterialParameter::e0)))
+    if ((which == MaterialParameter::e0 && seen.count({MaterialParameter::yield_stress, f.parameter.region})) ||
+        (which == MaterialParameter::yield_stress && seen.count({MaterialParameter::e0, f.parameter.region})))
       throw InputError("fit", key, "material.e0 and material.yield_stress are one parameter: free one of them");
     // The start: the first data set's value, within the magnitudes the key declares plausible
     // (the default bounds are clipped to them) -- otherwise a unit slip is fitted.
-    const double start = value_of(first.material, f.parameter);
-    const auto plausible = plausible_magnitudes(key);
+    const double start = value_of(first, f.parameter);
+    const MaterialInput& first_material = first.region_material(f.parameter.region);
+    const auto plausible = plausible_magnitudes(declared_key);
     if (plausible && !(start >= plausible->low && start <= plausible->high))
       throw InputError(first.source, key,
                        fmt::format("starts at {:g}{} (the load case's value), outside {}, {:g} to {:g}{}: a fit "
                                    "starts and stays within them (is the unit right?)",
                                    start, unit, plausible->of_what, plausible->low, plausible->high, unit));
-    const auto [low, high] = physical_range(f.parameter);
+    const auto [low, high] = physical_range(which);
     if (!(f.lower < f.upper))
       throw InputError("fit", key, fmt::format("bounds {}:{} are reversed or empty (lower < upper needed)", f.lower, f.upper));
     // Open ends but kappa's 0 and the rate exponent's [1, 100] (the key accepts both ends).
-    if (!(f.lower >= low && f.upper <= high) || (f.lower == low && low == 0.0 && f.parameter != MaterialParameter::kappa) ||
-        (f.upper == high && f.parameter != MaterialParameter::rate_exponent))
+    if (!(f.lower >= low && f.upper <= high) || (f.lower == low && low == 0.0 && which != MaterialParameter::kappa) ||
+        (f.upper == high && which != MaterialParameter::rate_exponent))
       throw InputError("fit", key,
                        fmt::format("bounds {}:{} leave the physical range ({}, {})", f.lower, f.upper, low, high));
     // Each bound a value the key accepts (its declared interval) and a solid plausibly has.
-    for (const auto& [which, bound] : {std::pair{"lower", f.lower}, std::pair{"upper", f.upper}}) {
-      if (const auto words = declared_interval_problem(key, bound))
+    for (const auto& [bound_name, bound] : {std::pair{"lower", f.lower}, std::pair{"upper", f.upper}}) {
+      if (const auto words = declared_interval_problem(declared_key, bound))
         throw InputError("fit", key,
-                         fmt::format("bounds {:g}:{:g}: the {} bound {}, as {} declares", f.lower, f.upper, which, *words, key));
+                         fmt::format("bounds {:g}:{:g}: the {} bound {}, as {} declares", f.lower, f.upper, bound_name, *words, declared_key));
       if (plausible && !(bound >= plausible->low && bound <= plausible->high))
         throw InputError("fit", key,
                          fmt::format("bounds {:g}:{:g}: the {} bound lies outside {}, {:g} to {:g}{} (is the unit "
                                      "right?)",
-                                     f.lower, f.upper, which, plausible->of_what, plausible->low, plausible->high, unit));
+                                     f.lower, f.upper, bound_name, plausible->of_what, plausible->low, plausible->high, unit));
       // sigma_y is e0 = sigma_y / (3 mu) to the law: a bound must give an elastic-limit strain.
-      if (f.parameter == MaterialParameter::yield_stress) {
-        const double e0 = e0_of_yield_stress(bound, first.material.E, first.material.nu);
+      if (which == MaterialParameter::yield_stress) {
+        const double e0 = e0_of_yield_stress(bound, first_material.E, first_material.nu);
         if (const auto e0_words = declared_interval_problem("material.e0", e0))
           throw InputError("fit", key,
                            fmt::format("bounds {:g}:{:g}: the {} bound gives the elastic-limit strain e0 = sigma_y / "
                                        "(3 mu) = {:.3g} with material.E = {:g} Pa and material.nu = {:g}, but material.e0 {}",
-                                       f.lower, f.upper, which, e0, first.material.E, first.material.nu, *e0_words));
+                                       f.lower, f.upper, bound_name, e0, first_material.E, first_material.nu, *e0_words));
       }
     }
     // A start outside the bounds is refused, never moved: the fit would start elsewhere than told.
@@ -407,7 +417,8 @@ void check_problem(const FitProblem& problem) {
                                    "inside them (in the load case, or with --set) or widen them (--bounds {}=lower:upper)",
                                    start, unit, f.lower, f.upper, unit, key));
     for (const auto& d : problem.data) {
-      if (const auto why = inapplicable(d.load_case.material, f.parameter)) throw InputError(d.load_case.source, key, *why);
+      if (const auto why = inapplicable(d.load_case.region_material(f.parameter.region), which))
+        throw InputError(d.load_case.source, key, *why);
     }
   }
   if (points < problem.free.size())
@@ -429,9 +440,9 @@ std::size_t best_start(const std::vector<StartOutcome>& outcomes, const std::str
 }
 
 /// The free parameters' keys and bounds, as the forward models take them.
-std::pair<std::vector<MaterialParameter>, std::vector<std::pair<double, double>>> split(
+std::pair<std::vector<RegionParameter>, std::vector<std::pair<double, double>>> split(
     const std::vector<FreeParameter>& free) {
-  std::vector<MaterialParameter> parameters;
+  std::vector<RegionParameter> parameters;
   std::vector<std::pair<double, double>> bounds;
   for (const FreeParameter& f : free) {
     parameters.push_back(f.parameter);
@@ -468,7 +479,7 @@ FitData synthetic_data(const LoadCase& truth, FitDataKind kind, const std::vecto
   d.values.assign(abscissa.size(), 0.0);
   const auto [parameters, bounds] = split(free);
   std::vector<double> theta;
-  for (MaterialParameter p : parameters) theta.push_back(value_of(truth.material, p));
+  for (const RegionParameter& p : parameters) theta.push_back(value_of(truth, p));
   const ForwardModel model(d, parameters, bounds, false);
   d.values = model.evaluate(theta, false).values;
   double largest = 0.0;
@@ -486,10 +497,10 @@ FitResult fit(const FitProblem& problem) {
   const std::size_t p = problem.free.size();
   // Named variables, not a structured binding: clang 14 cannot capture bindings in lambdas.
   const auto free_split = split(problem.free);
-  const std::vector<MaterialParameter>& parameters = free_split.first;
+  const std::vector<RegionParameter>& parameters = free_split.first;
   const auto& bounds = free_split.second;
   // The parameters Ceres sees, x = theta / scale, are of order one.
-  const MaterialInput& first = problem.data.front().load_case.material;
+  const LoadCase& first = problem.data.front().load_case;
   std::vector<double> scale, case_start;
   for (const auto& f : problem.free) {
     const double v = std::clamp(value_of(first, f.parameter), f.lower, f.upper);
@@ -1471,7 +1482,7 @@ FitResult fit(const FitProblem& problem) {
       shapes.insert(d.load_case.punch.shape);
     }
     LoadCase at = data.load_case;
-    for (std::size_t j = 0; j < p; ++j) set_value(at.material, parameters[j], theta[j]);
+    for (std::size_t j = 0; j < p; ++j) set_value(at, parameters[j], theta[j]);
     const int points = 20;
     const auto spaced = [&](double from, double to, int n) {
       std::vector<double> x;

@@ -112,12 +112,8 @@ std::pair<double, double> parse_bounds(const std::string& text, const std::strin
   return {lo, hi};
 }
 
-MaterialParameter parameter_or_fail(const std::string& key, const std::string& where) {
-  const auto p = parameter_of_key(key);
-  if (!p && key.rfind("layer.", 0) == 0)
-    throw InputError(where, printable(key, 60),
-                     "a layer's parameters cannot be freed yet (docs/MODEL.md §14.5 is not built): a coated case is "
-                     "fitted for its substrate's material.* keys, with its layers as given");
+RegionParameter parameter_or_fail(const std::string& key, const std::string& where) {
+  const auto p = region_parameter_of_key(key);
   if (!p) throw InputError(where, printable(key, 60), fmt::format("is not a parameter a fit can free (free: {})", fittable_keys()));
   return *p;
 }
@@ -344,12 +340,14 @@ FitJob read_fit_job(const FitCommandLine& cl) {
   for (const auto& key : free) {
     FreeParameter f;
     f.parameter = parameter_or_fail(key, "--free");
-    const double start = value_of(problem.data.front().load_case.material, f.parameter);
-    std::tie(f.lower, f.upper) = default_bounds(f.parameter, start);
+    // A layer the case does not have is named by check_problem; its start is read there.
+    const LoadCase& first = problem.data.front().load_case;
+    const double start = f.parameter.region <= first.layers.size() ? value_of(first, f.parameter) : 1.0;
+    std::tie(f.lower, f.upper) = default_bounds(f.parameter.which, start);
     problem.free.push_back(f);
   }
   for (const auto& [key, range] : bounds) {
-    const MaterialParameter p = parameter_or_fail(key, bounds_source);
+    const RegionParameter p = parameter_or_fail(key, bounds_source);
     auto it = std::find_if(problem.free.begin(), problem.free.end(), [&](const FreeParameter& f) { return f.parameter == p; });
     if (it == problem.free.end()) throw InputError(bounds_source, key, "has bounds but is not free");
     it->lower = range.first;
@@ -408,7 +406,7 @@ nlohmann::json fit_json(const FitProblem& problem, const FitResult& r) {
                                        {"verdict", pd.verdict},
                                        {"lower", f.lower},
                                        {"upper", f.upper},
-                                       {"start", value_of(problem.data.front().load_case.material, f.parameter)}};
+                                       {"start", value_of(problem.data.front().load_case, f.parameter)}};
   }
   j["parameters"] = parameters;
   j["free"] = order;

@@ -274,7 +274,7 @@ CurveReduction reduce_to_resolution(FitData& data) {
   return r;
 }
 
-ForwardModel::ForwardModel(FitData data, std::vector<MaterialParameter> parameters,
+ForwardModel::ForwardModel(FitData data, std::vector<RegionParameter> parameters,
                            const std::vector<std::pair<double, double>>& bounds, bool finite_differences_only,
                            const std::vector<double>& plan_at)
     : data_(std::move(data)), parameters_(std::move(parameters)), bounds_(bounds) {
@@ -334,29 +334,31 @@ ForwardModel::ForwardModel(FitData data, std::vector<MaterialParameter> paramete
     for (std::size_t c = 0; c < corners && !bbar; ++c) {
       LoadCase corner = user;
       for (std::size_t j = 0; j < parameters_.size(); ++j)
-        set_value(corner.material, parameters_[j], (c >> j) & 1 ? bounds_[j].second : bounds_[j].first);
+        set_value(corner, parameters_[j], (c >> j) & 1 ? bounds_[j].second : bounds_[j].first);
       bbar = choose_element(corner) == ElementKind::bbar;
     }
     prepared_.mesh.element = bbar ? ElementChoice::bbar : ElementChoice::q1;
   }
   std::vector<double> start = plan_at;
   if (start.empty())
-    for (MaterialParameter p : parameters_) start.push_back(value_of(user.material, p));
+    for (const RegionParameter& p : parameters_) start.push_back(value_of(user, p));
   replan_mesh(start);
 
   // Forward sensitivities where the state is a function of depth and theta alone.
+  for (const RegionParameter& p : parameters_) sensitivity_parameters_.push_back(p.which);
   if (finite_differences_only) fd_reason_ = "finite differences asked for";
+  else if (!user.layers.empty()) fd_reason_ = "a coated specimen's force is not homogeneous in one E (MODEL.md §14.1)";
   else if (data_.kind == FitDataKind::time_history) fd_reason_ = "a protocol in time carries its history";
   else if (user.material.model == MaterialModel::j2) fd_reason_ = "J2 flow theory carries its history";
   else if (user.contact.friction > 0.0) fd_reason_ = "friction carries its slip history";
-  else if (std::count(parameters_.begin(), parameters_.end(), MaterialParameter::nu))
+  else if (std::count(sensitivity_parameters_.begin(), sensitivity_parameters_.end(), MaterialParameter::nu))
     fd_reason_ = "nu also shapes the condensed far field";
   sensitivities_ = fd_reason_.empty();
 }
 
 void ForwardModel::replan_mesh(const std::vector<double>& theta) {
   LoadCase lc = data_.load_case;
-  for (std::size_t j = 0; j < parameters_.size(); ++j) set_value(lc.material, parameters_[j], theta[j]);
+  for (std::size_t j = 0; j < parameters_.size(); ++j) set_value(lc, parameters_[j], theta[j]);
   validate(lc);
   // Force control: the depth the largest force reaches sizes the mesh; fixed with it for every run.
   lc = with_depth_estimate(std::move(lc));
@@ -412,14 +414,14 @@ void ForwardModel::lay_path_through_times() {
 
 LoadCase ForwardModel::case_at(const std::vector<double>& theta) const {
   LoadCase lc = prepared_;
-  for (std::size_t j = 0; j < parameters_.size(); ++j) set_value(lc.material, parameters_[j], theta[j]);
+  for (std::size_t j = 0; j < parameters_.size(); ++j) set_value(lc, parameters_[j], theta[j]);
   validate(lc);
   return lc;
 }
 
 LoadCase ForwardModel::fitted_case(const std::vector<double>& theta) const {
   LoadCase lc = data_.load_case;
-  for (std::size_t j = 0; j < parameters_.size(); ++j) set_value(lc.material, parameters_[j], theta[j]);
+  for (std::size_t j = 0; j < parameters_.size(); ++j) set_value(lc, parameters_[j], theta[j]);
   return lc;
 }
 
@@ -446,7 +448,7 @@ std::vector<double> ForwardModel::run_once(const LoadCase& base, int refinement,
       if (waypoint == 0) return;
       force_at[waypoint] = depth_response ? r.alpha : r.force;
       if (jacobian && available) {
-        auto s = sim.force_sensitivities(parameters_);
+        auto s = sim.force_sensitivities(sensitivity_parameters_);
         available = s.has_value();
         if (available) sensitivity_at[waypoint] = std::move(*s);
       }
@@ -471,10 +473,10 @@ std::vector<double> ForwardModel::run_once(const LoadCase& base, int refinement,
   bool available = jacobian != nullptr;
   sim.run([&](const IncrementRecord& r) {
     const auto step = static_cast<std::size_t>(r.step);
-    if (available && step < descent.size() && descent[step]) available = sim.sensitivities(parameters_).has_value();
+    if (available && step < descent.size() && descent[step]) available = sim.sensitivities(sensitivity_parameters_).has_value();
   });
   std::optional<Simulation::Sensitivities> end;
-  if (available) end = sim.sensitivities(parameters_, true);
+  if (available) end = sim.sensitivities(sensitivity_parameters_, true);
   if (jacobian) {
     jacobian->clear();
     if (end) jacobian->assign(points, std::vector<double>(parameters_.size(), 0.0));

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <array>
 #include <limits>
+#include <regex>
+#include <stdexcept>
 
 #include <fmt/format.h>
 
@@ -80,10 +82,43 @@ std::optional<MaterialParameter> parameter_of_key(const std::string& key) {
   return std::nullopt;
 }
 
+std::string key_of(const RegionParameter& parameter) {
+  const std::string key = key_of(parameter.which);
+  return parameter.region == 0 ? key : fmt::format("layer.{}.{}", parameter.region, key);
+}
+
+std::optional<RegionParameter> region_parameter_of_key(const std::string& key) {
+  // layer.K.material.NAME: K a positive integer without sign or leading zero.
+  static const std::regex layer_key(R"(^layer\.([1-9][0-9]{0,5})\.(material\..+)$)");
+  std::smatch m;
+  if (!std::regex_match(key, m, layer_key)) {
+    const auto p = parameter_of_key(key);
+    if (!p) return std::nullopt;
+    return RegionParameter{*p, 0};
+  }
+  const auto p = parameter_of_key(m.str(2));
+  if (!p) return std::nullopt;
+  return RegionParameter{*p, static_cast<std::size_t>(std::stoul(m.str(1)))};
+}
+
+static MaterialInput& material_of(LoadCase& lc, std::size_t region) {
+  if (region > lc.layers.size()) throw std::out_of_range("a parameter of a layer the load case does not have");
+  return region == 0 ? lc.material : lc.layers[region - 1].material;
+}
+
+double value_of(const LoadCase& lc, const RegionParameter& parameter) {
+  if (parameter.region > lc.layers.size()) throw std::out_of_range("a parameter of a layer the load case does not have");
+  return value_of(lc.region_material(parameter.region), parameter.which);
+}
+
+void set_value(LoadCase& lc, const RegionParameter& parameter, double value) {
+  set_value(material_of(lc, parameter.region), parameter.which, value);
+}
+
 std::string fittable_keys() {
   std::string list;
   for (const auto& n : names) list += (list.empty() ? "" : ", ") + std::string(n.key);
-  return list;
+  return list + "; a coated specimen's layer K: layer.K.material.E, ... (docs/MODEL.md §14.5)";
 }
 
 double value_of(const MaterialInput& m, MaterialParameter parameter) {

@@ -176,8 +176,14 @@ const IncrementRecord* DiscretizationErrorEstimate::companion_row(std::size_t co
 
 double force_order_assumed(const LoadCase& load_case) {
   constexpr double plastic_order = 1.5;
+  // A coated specimen's force converges at first order, measured (a 400 GPa film 50 um thick on a
+  // 200 GPa substrate under a 1 mm sphere at 20 um: 907.86, 906.70, 906.22, 905.98 N at 10, 20, 40
+  // and 80 contact nodes, differences falling by 2.7 then 1.9; a film of whole fine rows converges
+  // alike, so not the interface's laying; docs/MODEL.md §14.3).
+  constexpr double layered_order = 1.0;
   const double shape_order = make_punch(load_case.punch)->force_convergence_order();
-  return load_case.any_inelastic() ? std::min(shape_order, plastic_order) : shape_order;
+  const double order = load_case.any_inelastic() ? std::min(shape_order, plastic_order) : shape_order;
+  return load_case.layers.empty() ? order : std::min(order, layered_order);
 }
 
 std::optional<DiscretizationErrorEstimate::AtIncrement> DiscretizationErrorEstimate::at(

@@ -58,8 +58,12 @@ inline constexpr double unit_slip_factor = 100.0;
 inline constexpr int coarse_first_min_contact_nodes = 12;
 
 struct FreeParameter {
-  MaterialParameter parameter = MaterialParameter::E;
+  RegionParameter parameter;  ///< which parameter, of which region (a layer's or [material]'s)
   double lower = 0.0, upper = 0.0;
+  FreeParameter() = default;
+  FreeParameter(RegionParameter p, double low, double high) : parameter(p), lower(low), upper(high) {}
+  /// A parameter of [material] (the whole specimen's, or a coated one's substrate).
+  FreeParameter(MaterialParameter p, double low, double high) : parameter{p, 0}, lower(low), upper(high) {}
 };
 
 /// One iteration of the optimiser, for the progress line.

@@ -101,7 +101,7 @@ public:
   /// case) and the element over `bounds`, and lays the load path through the data.  Throws
   /// InputError when the scene cannot produce the data (depths beyond the case's, an imprint that
   /// never unloads, radii off the surface).
-  ForwardModel(FitData data, std::vector<MaterialParameter> parameters,
+  ForwardModel(FitData data, std::vector<RegionParameter> parameters,
                const std::vector<std::pair<double, double>>& bounds, bool finite_differences_only,
                const std::vector<double>& plan_at = {});
 
@@ -121,7 +121,7 @@ public:
   LoadCase case_at(const std::vector<double>& theta) const;
   /// The user's load case with the parameters at theta (own path and mesh): fitted_case.toml.
   LoadCase fitted_case(const std::vector<double>& theta) const;
-  const std::vector<MaterialParameter>& parameters() const { return parameters_; }
+  const std::vector<RegionParameter>& parameters() const { return parameters_; }
   double planned_contact_half_width() const { return prepared_.mesh.contact_half_width.value_or(0.0); }
 
 private:
@@ -132,7 +132,9 @@ private:
   std::vector<double> run(const LoadCase& lc, std::vector<std::vector<double>>* jacobian, int& runs) const;
 
   FitData data_;
-  std::vector<MaterialParameter> parameters_;
+  std::vector<RegionParameter> parameters_;
+  /// The parameters as the simulation's forward sensitivities name them (a homogeneous specimen's).
+  std::vector<MaterialParameter> sensitivity_parameters_;
   std::vector<std::pair<double, double>> bounds_;
   LoadCase prepared_;  ///< the data's path, the fixed mesh and element
   std::vector<double> path_;  ///< curve: the data depths without repeats, from 0; time history: the waypoint times

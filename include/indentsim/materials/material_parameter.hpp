@@ -6,6 +6,8 @@
 // flow rule: material.reference_strain_rate (Perzyna), .creep_coefficient, .reference_stress
 // (Norton), .rate_exponent (both).
 // One place for their names, their values in a load case and their physically safe ranges.
+#include <compare>
+#include <cstddef>
 #include <optional>
 #include <string>
 #include <utility>
@@ -35,6 +37,23 @@ double value_of(const MaterialInput& material, MaterialParameter parameter);
 /// Sets the parameter, keeping the others as the load case states them: with yield_stress the
 /// load case then carries sigma_y and e0 follows from it (also when E or nu change afterwards).
 void set_value(MaterialInput& material, MaterialParameter parameter, double value);
+
+/// A material parameter of one region of the specimen (docs/MODEL.md §14.5): region 0 is
+/// [material] (the substrate of a coated specimen), region k the k-th [[layer]] from the surface.
+struct RegionParameter {
+  MaterialParameter which = MaterialParameter::E;
+  std::size_t region = 0;
+  friend auto operator<=>(const RegionParameter&, const RegionParameter&) = default;
+};
+/// "material.E", "layer.2.material.E": the key --free, --bounds, --set and fit.json name it by.
+std::string key_of(const RegionParameter& parameter);
+/// The parameter a key names ("material.n", "layer.1.material.yield_stress"), or nullopt when the
+/// key is not a fittable one.
+std::optional<RegionParameter> region_parameter_of_key(const std::string& key);
+/// The parameter's value in the load case, and setting it (as value_of and set_value of its
+/// region's material); the region must exist (RegionParameter::region <= layers.size()).
+double value_of(const LoadCase& load_case, const RegionParameter& parameter);
+void set_value(LoadCase& load_case, const RegionParameter& parameter, double value);
 
 /// The open interval of values the model accepts: E > 0, -1 < nu < 0.5, e0 and sigma_y > 0,
 /// kappa in [0, 1), n in (0, 1), the rates and the reference stress > 0, the rate exponent in
