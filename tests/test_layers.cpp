@@ -12,6 +12,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "indentsim/analysis/coating_analysis.hpp"
+#include "indentsim/analysis/curve_analysis.hpp"
 #include "indentsim/base/error.hpp"
 #include "indentsim/fitting/fit.hpp"
 #include "indentsim/geometry/mesh.hpp"
@@ -294,6 +296,9 @@ TEST(Layers, BadLayersAreRefusedNamingTheLayerAndTheKey) {
     EXPECT_EQ(e.key(), "layer");
   }
   EXPECT_EQ(refused_key("\n[layer]\nthickness = 1e-5\n"), "layer");
+  std::string stack;
+  for (std::size_t k = 0; k <= max_layers; ++k) stack += layer("1e-6");
+  EXPECT_EQ(refused_key(stack), "layer");
   // --set names a layer that is there, and its keys are checked as the layer's.
   EXPECT_EQ(refused_key(film, {"layer.2.material.E=1e9"}), "layer.2.material.E");
   EXPECT_EQ(refused_key(film, {"layer.1.material.E=-1"}), "layer[1].material.E");
@@ -334,6 +339,38 @@ TEST(Layers, AFilmsModulusIsFittedFromACoatedCurveWithTheSubstrateKnown) {
   EXPECT_NEAR(r.values[0] / 400e9, 1.0, 0.03);
 }
 
+/// The axisymmetric flat punch of loadcases/axisymmetric/flat_punch.toml (radius 50 um, 0.5 um
+/// deep) on a specimen 400 radii across, so that the specimen's own size is no part of its
+/// stiffness, in one increment.
+LoadCase flat_punch_on(const MaterialInput& substrate) {
+  LoadCase lc = indentsim::testing::shipped_case("axisymmetric/flat_punch.toml",
+                                                 {"load.increments=1", "geometry.lx=20e-3", "geometry.ly=20e-3"});
+  lc.material = substrate;
+  return lc;
+}
+
+TEST(Layers, AFlatPunchFeelsItsFilmByGaosWeightToFirstOrder) {
+  // Gao, Chiu and Lee (1992): to first order in the film's mismatch, a flat punch of radius a on a
+  // film of thickness t feels E* = E*_s + (E*_f - E*_s) I0(t/a) (equal Poisson's ratios).  A film
+  // 2% stiffer than its substrate: the force's relative rise over 2% is I0.
+  const MaterialInput substrate = elastic(70e9, 0.2);
+  const double own = forces_of(flat_punch_on(substrate)).back();
+  for (const double t_over_a : {0.25, 1.0, 4.0}) {
+    const LoadCase coated = with_layer(flat_punch_on(substrate), t_over_a * 50e-6, elastic(70e9 * 1.02, 0.2));
+    const double share = (forces_of(coated).back() / own - 1.0) / 0.02;
+    const double I0 = gao_weights(t_over_a, 0.2).I0;
+    std::cout << fmt::format("t/a = {}: the film's share {:.4f}, Gao's I0 {:.4f}\n", t_over_a, share, I0);
+    EXPECT_NEAR(share / I0, 1.0, 0.03);
+  }
+  // The weights' limits: a film of no thickness is the substrate, an infinitely thick one the film.
+  EXPECT_NEAR(gao_weights(1e-9, 0.3).I0, 0.0, 1e-7);
+  EXPECT_NEAR(gao_weights(1e9, 0.3).I0, 1.0, 1e-8);
+  EXPECT_NEAR(gao_weights(1e9, 0.3).I1, 1.0, 1e-8);
+  // The inversion returns the film it was given.
+  const double apparent = gao_contact_modulus(400e9, 0.25, 200e9, 0.3, 0.7);
+  EXPECT_NEAR(*gao_film_modulus(apparent, 0.25, 200e9, 0.3, 0.7) / 400e9, 1.0, 1e-12);
+}
+
 class LayersCli : public indentsim::testing::CliTest {};
 
 TEST_F(LayersCli, ABadLayerExitsWith2NamingItAndWritesNothing) {
@@ -370,7 +407,7 @@ n = 0.1
 [load]
 control = "force"
 path = [0.0, 2e-3, 0.2e-3]
-increments = [8, 4]
+increments = [8, 8]
 [mesh]
 contact_nodes = 10
 [output]
@@ -383,6 +420,14 @@ fields_every = 0
   EXPECT_EQ(summary["layers"][0]["model"], "j2");
   EXPECT_EQ(summary["layers"][0]["thickness"], 0.5e-6);
   EXPECT_EQ(summary["material"]["E"], 200e9);
+  // The analysis of its unloading knows the coating (docs/MODEL.md §14.4).
+  ASSERT_FALSE(summary["unloading"].empty()) << summary.dump(2);
+  const auto& coating = summary["unloading"][0]["analysis"]["coating"];
+  ASSERT_TRUE(coating.is_object()) << summary["unloading"][0].dump(2);
+  EXPECT_DOUBLE_EQ(coating["h_max_over_t"].get<double>(), summary["unloading"][0]["depth"].get<double>() / 0.5e-6);
+  EXPECT_EQ(coating["film_E_true"], 70e9);
+  EXPECT_NEAR(coating["film_share_gao_I0"].get<double>(),
+              gao_weights(0.5e-6 / summary["unloading"][0]["analysis"]["contact_radius"].get<double>(), 0.3).I0, 1e-12);
   bool region_field = false;
   for (const auto& entry : fs::recursive_directory_iterator(dir_ / "full"))
     if (entry.path().extension() == ".vtu")

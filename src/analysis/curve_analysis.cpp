@@ -54,6 +54,7 @@ AnalysisContext context_of(const CurveAnalysis& c, const PunchShape& punch) {
   context.shape = c.punch.shape;
   context.settings = c.settings;
   context.specimen_nu = c.specimen_nu;
+  context.coating = c.coating;
   return context;
 }
 
@@ -132,6 +133,7 @@ CurveAnalysis analyze_run_curve(const fs::path& path, const std::vector<std::str
   c.punch = lc.punch;
   c.settings = lc.analysis;
   c.specimen_nu = lc.surface_material().nu;  // the top layer's, under a coated surface (MODEL.md §14.1)
+  c.coating = coating_of(lc);
   c.depth = curve.depth;
   c.force = curve.force;
   c.time = curve.time;
@@ -342,6 +344,17 @@ std::string analysis_table(const CurveAnalysis& c) {
                        TableUnits::radius(*a.true_contact_radius), TableUnits::stress(a.true_hardness),
                        TableUnits::stress(a.true_reduced_modulus),
                        a.pile_up_ratio ? fmt::format("{:.5g}", *a.pile_up_ratio) : std::string("-"));
+    if (a.coating) {
+      const auto& co = *a.coating;
+      t += fmt::format("    coating: h_max/t = {:.3g}, a/t = {:.3g}; the film's share of E_r by Gao's weight {:.3g}; "
+                       "the film's E by Gao's model {}{} (true {})\n",
+                       co.depth_over_thickness, co.radius_over_thickness, co.film_share,
+                       TableUnits::stress(co.film_modulus_gao),
+                       co.film_modulus_gao_true_contact
+                           ? ", with the true contact " + TableUnits::stress(co.film_modulus_gao_true_contact)
+                           : std::string(),
+                       TableUnits::stress(co.film_modulus));
+    }
     if (a.hold) {
       const HoldAnalysis& h = *a.hold;
       t += fmt::format("    hold before it: {:.4g} s, creep {}, dh/dt at its end {}/s", h.duration, u.depth(h.creep_depth),

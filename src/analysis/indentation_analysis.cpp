@@ -344,6 +344,28 @@ BranchAnalysis analyze_branch(const std::vector<double>& depth, const std::vecto
       if (a.area > 0.0) a.pile_up_ratio = *a.true_area / a.area;
     }
   }
+  if (context.coating && a.contact_radius > 0.0) {
+    const CoatingContext& c = *context.coating;
+    BranchAnalysis::Coating coating;
+    coating.depth_over_thickness = a.h_max / c.thickness;
+    coating.radius_over_thickness = a.contact_radius / c.thickness;
+    coating.film_share = gao_weights(c.thickness / a.contact_radius, c.substrate_nu).I0;
+    coating.film_modulus = c.film_E;
+    // The specimen's contact modulus E* from E_r, the indenter's compliance taken out.
+    const auto film_modulus = [&](const std::optional<double>& reduced_modulus,
+                                  double radius) -> std::optional<double> {
+      if (!reduced_modulus || !(radius > 0.0)) return std::nullopt;
+      const double nu_i = context.settings.indenter_nu;
+      const double indenter = context.settings.indenter_E ? (1.0 - nu_i * nu_i) / *context.settings.indenter_E : 0.0;
+      const double compliance = 1.0 / *reduced_modulus - indenter;
+      if (!(compliance > 0.0)) return std::nullopt;
+      return gao_film_modulus(1.0 / compliance, c.film_nu, c.substrate_E, c.substrate_nu, c.thickness / radius);
+    };
+    coating.film_modulus_gao = film_modulus(a.reduced_modulus, a.contact_radius);
+    if (a.true_contact_radius)
+      coating.film_modulus_gao_true_contact = film_modulus(a.true_reduced_modulus, *a.true_contact_radius);
+    a.coating = coating;
+  }
   return a;
 }
 
@@ -385,6 +407,13 @@ nlohmann::ordered_json branch_json(const BranchAnalysis& a, const AnalysisContex
   j["true_H"] = number_or_null(a.true_hardness);
   j["true_E_r"] = number_or_null(a.true_reduced_modulus);
   j["pile_up_ratio"] = number_or_null(a.pile_up_ratio);
+  if (a.coating)
+    j["coating"] = {{"h_max_over_t", a.coating->depth_over_thickness},
+                    {"contact_radius_over_t", a.coating->radius_over_thickness},
+                    {"film_share_gao_I0", a.coating->film_share},
+                    {"film_E_gao", number_or_null(a.coating->film_modulus_gao)},
+                    {"film_E_gao_true_contact", number_or_null(a.coating->film_modulus_gao_true_contact)},
+                    {"film_E_true", a.coating->film_modulus}};
   if (a.hold) {
     const HoldAnalysis& h = *a.hold;
     nlohmann::ordered_json hold{{"start_index", h.start},       {"duration_s", h.duration},

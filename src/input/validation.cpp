@@ -190,6 +190,12 @@ static void validate_rate(const LoadCase& lc) {
 /// specimen, and each layer's material valid as [material] is (checked by the same functions on a
 /// scratch case whose material is the layer's; its messages name layer[k]).
 static void validate_layers(const LoadCase& lc) {
+  // Each layer is at least 4 rows of elements and an interface laid into the mesh; a stack of
+  // more is a graded material, which wants its own model.
+  if (lc.layers.size() > max_layers)
+    throw InputError(lc.source, "layer",
+                     fmt::format("{} layers: at most {} (a finer stack is a graded material, not built)",
+                                 lc.layers.size(), max_layers));
   double depth = 0.0;
   for (std::size_t k = 0; k < lc.layers.size(); ++k) {
     const std::string name = fmt::format("layer[{}]", k + 1);

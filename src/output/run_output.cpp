@@ -180,6 +180,7 @@ LoadHistorySummary::LoadHistorySummary(const LoadCase* load_case) {
   context_.shape = load_case->punch.shape;
   context_.settings = load_case->analysis;
   context_.specimen_nu = load_case->surface_material().nu;  // the top layer's, under a coated surface (MODEL.md §14.1)
+  context_.coating = coating_of(*load_case);
   if (load_case->load.control == LoadControlKind::force) targets_ = plan_increments(load_case->load);
 }
 

@@ -38,6 +38,7 @@ struct CurveAnalysis {
   PunchInput punch;
   AnalysisInput settings;
   std::optional<double> specimen_nu;
+  std::optional<CoatingContext> coating;  ///< a coated run's film (docs/MODEL.md §14.4)
   std::string depth_unit = "m", force_unit = "N";  ///< the units the file was read in
   std::vector<double> depth, force;                ///< the whole curve [m], [N] (or N/m)
   std::vector<double> time;                        ///< [s], or empty: a curve without time

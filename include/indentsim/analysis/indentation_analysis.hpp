@@ -26,6 +26,7 @@
 
 #include <nlohmann/json_fwd.hpp>
 
+#include "indentsim/analysis/coating_analysis.hpp"
 #include "indentsim/input/load_case.hpp"
 #include "indentsim/simulation/load_stepping.hpp"
 
@@ -113,6 +114,18 @@ struct BranchAnalysis {
   std::optional<double> exact_stiffness, true_contact_radius, true_area, true_hardness, true_reduced_modulus,
       pile_up_ratio;
   std::optional<HoldAnalysis> hold;  ///< with time, a hold before the peak (analyze_hold)
+  /// A coated specimen's branch (docs/MODEL.md §14.4): its depth and Oliver-Pharr contact radius
+  /// against the film's thickness, the film's share I0 of the apparent modulus by Gao's weight,
+  /// and the film's modulus from E_r by Gao's model beside the true one.
+  struct Coating {
+    double depth_over_thickness = 0.0, radius_over_thickness = 0.0, film_share = 0.0;
+    std::optional<double> film_modulus_gao;
+    /// The same from a simulated run's true contact (its radius and E_r): what Gao's model gives
+    /// without Oliver and Pharr's error in the contact area.
+    std::optional<double> film_modulus_gao_true_contact;
+    double film_modulus = 0.0;
+  };
+  std::optional<Coating> coating;
 };
 
 /// The settings and the indenter the analysis needs.
@@ -122,6 +135,7 @@ struct AnalysisContext {
   PunchShapeKind shape = PunchShapeKind::sphere;
   AnalysisInput settings;
   std::optional<double> specimen_nu;  ///< for the specimen modulus (a run's material.nu)
+  std::optional<CoatingContext> coating;  ///< a coated run's film (coating_of)
 };
 
 /// epsilon of Oliver and Pharr for the shape, unless the settings give one.

@@ -97,6 +97,9 @@ struct MaterialInput {
   bool flow_stress_law() const { return hardening != HardeningLaw::linear && hardening != HardeningLaw::power; }
 };
 
+/// The most [[layer]] tables a load case takes.
+inline constexpr std::size_t max_layers = 100;
+
 /// One layer of a coated specimen (docs/MODEL.md §14): a band of `thickness` below the layers
 /// above it, of its own material, perfectly bonded to its neighbours.
 struct LayerInput {
