@@ -39,7 +39,11 @@ parameter (one line per value of a second swept parameter).
 
 draws an analysis.json: the whole curve, each unloading branch with its power-law fit, S as the
 tangent at h_max, h_f, h_c and h_max marked, and a table of the Oliver-Pharr numbers (with the true
-contact's for a run): FILE.png and FILE.svg beside it.
+contact's for a run): FILE.png and FILE.svg beside it.  A coated run with two or more branches (a
+multi-cycle load path) gains a last row, the substrate effect (MODEL.md §14.4): E_r (Oliver-Pharr
+and true contact) against h_max/t, t the top film's thickness, between the film's and the region
+below's own E/(1 - ν²), with Gao, Chiu and Lee's (1992) model at each branch's a/t; and H
+(Oliver-Pharr and true) against h_max/t.
 
 --size slide (default: 16:9, 1920 x 1080 px) or column (a journal column, 3.5 in wide, 300 dpi);
 the style is plots/indentsim.mplstyle.  Needs Debian's python3-matplotlib (scripts/install-deps.sh).
@@ -60,7 +64,7 @@ import indentsim_plotting as ip  # noqa: E402
 
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from matplotlib import patheffects  # noqa: E402
+from matplotlib import patheffects, transforms  # noqa: E402
 from matplotlib.collections import PolyCollection  # noqa: E402
 from matplotlib.colors import LogNorm, Normalize  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
@@ -699,7 +703,8 @@ def analysis_case(report):
 def plot_analysis(path, size):
     """The Oliver-Pharr analysis of analysis.json: the whole curve, each unloading branch with its
     power-law fit, the stiffness S as the tangent at h_max, h_f, h_c and h_max marked, and the
-    numbers beside."""
+    numbers beside; a coated run with two or more branches, also the substrate effect
+    (plot_substrate_effect) in a last row."""
     report = json.loads(path.read_text())
     depth = np.array(report["curve_si"]["depth"], float)
     force = np.array(report["curve_si"]["force"], float)
@@ -731,7 +736,12 @@ def plot_analysis(path, size):
         e_label += f" = {ip.number(nu, 3)})" if nu is not None else ")"
     n = max(len(branches), 1)
     slide = size == "slide"
-    if slide:
+    # A coated run with several branches (a multi-cycle load path): a last row, the substrate effect
+    # (E_r and H against h_max/t; MODEL.md §14.4).  Any other run: the figure as it always was.
+    substrate_effect = bool(layers) and len(branches) >= 2
+    if substrate_effect:
+        fig, axes, effect_axes = substrate_effect_layout(n, slide)
+    elif slide:
         fig, axes = plt.subplots(n, 3, figsize=(ip.SLIDE_WIDTH, ip.SLIDE_WIDTH * 9 / 16 * (1 + 0.8 * (n - 1))),
                                  squeeze=False, width_ratios=[0.85, 1.1, 1.05])
     else:
@@ -853,9 +863,167 @@ def plot_analysis(path, size):
                 cell.get_text().set_fontweight("bold")
     if not branches:
         axes[0][0].text(0.5, 0.5, "no unloading branch", ha="center", transform=axes[0][0].transAxes)
+    if substrate_effect:
+        plot_substrate_effect(*effect_axes, branches, layers, ip.region_materials(case, summary)[0],
+                              report.get("indenter", {}), axi, slide)
     ip.run_title(fig, title)
     stem = path.with_suffix("")
     ip.save(fig, stem.parent, stem.name)
+
+
+# Gao, Chiu and Lee (Int. J. Solids Struct. 29, 1992): a film of thickness t on a substrate under a
+# flat punch of radius a, to first order in their mismatch; as src/analysis/coating_analysis.cpp
+# (docs/MODEL.md §14.4).
+
+def gao_weights(x, nu):
+    """Gao's weights (I0, I1) at x = t/a, ν the substrate's (the zeroth order)."""
+    # x ln((1 + x^2)/x^2) -> 0 as x -> 0: written with log1p.
+    x_log = x * math.log1p(1.0 / (x * x)) if x > 0 else 0.0
+    i0 = 2 / math.pi * math.atan(x) + ((1 - 2 * nu) * x_log - x / (1 + x * x)) / (2 * math.pi * (1 - nu))
+    i1 = 2 / math.pi * math.atan(x) + x_log / math.pi
+    return i0, i1
+
+
+def gao_contact_modulus(film, below, x):
+    """The coated specimen's contact modulus E* = 2μ/(1 - ν) [Pa] by Gao's model at x = t/a, with
+    μ = μ_s + (μ_f - μ_s) I0 and ν = ν_s + (ν_f - ν_s) I1; film and below are material blocks."""
+    nu_f, nu_s = film.get("nu", 0.3), below.get("nu", 0.3)
+    i0, i1 = gao_weights(x, nu_s)
+    mu_f, mu_s = film["E"] / (2 * (1 + nu_f)), below["E"] / (2 * (1 + nu_s))
+    mu, nu = mu_s + (mu_f - mu_s) * i0, nu_s + (nu_f - nu_s) * i1
+    return 2 * mu / (1 - nu)
+
+
+def substrate_effect_layout(n, slide):
+    """The analysis figure of a coated run with n >= 2 branches: the n rows of a branch's three panels
+    and a last row of two, the apparent E_r and H against h_max/t: (fig, axes, (ax_E, ax_H))."""
+    if slide:
+        fig = plt.figure(figsize=(ip.SLIDE_WIDTH, ip.SLIDE_WIDTH * 9 / 16 * (1 + 0.8 * (n - 1) + 1.0)))
+        grid = fig.add_gridspec(n + 1, 3, width_ratios=[0.85, 1.1, 1.05], height_ratios=[1] * n + [1.25])
+        axes = [[fig.add_subplot(grid[k, j]) for j in range(3)] for k in range(n)]
+        last = grid[n, :].subgridspec(1, 2, width_ratios=[1.15, 0.85])
+        return fig, axes, (fig.add_subplot(last[0, 0]), fig.add_subplot(last[0, 1]))
+    fig, column = plt.subplots(3 * n + 2, 1, figsize=(ip.COLUMN_WIDTH, 7.4 * n + 5.4), squeeze=False,
+                               height_ratios=[1, 1, 1.15] * n + [1.25, 1])
+    axes = [[column[3 * k][0], column[3 * k + 1][0], column[3 * k + 2][0]] for k in range(n)]
+    return fig, axes, (column[3 * n][0], column[3 * n + 1][0])
+
+
+def plot_substrate_effect(ax_e, ax_h, branches, layers, substrate, indenter, axi, slide):
+    """The substrate effect over a coated run's unloading branches (MODEL.md §14.4): the apparent
+    reduced modulus E_r (Oliver-Pharr, and at the true contact) against h_max/t, t the top film's
+    thickness, between the film's own and the region below's E/(1 - ν²) (dotted), with Gao, Chiu
+    and Lee's model at each branch's a/t (the Oliver-Pharr a, and the true one); and the hardness H
+    (Oliver-Pharr and true) against h_max/t.  An elastic indenter's (analysis.json: indenter.E)
+    compliance is added to the references and the model: they are then E_r's, as the data are."""
+    t = layers[0]["thickness"]
+    film = layers[0]["material"]
+    below = layers[1]["material"] if len(layers) > 1 else substrate
+    names = ip.region_names(len(layers) + 1)
+    film_name, below_name = names[1], (names[2] if len(layers) > 1 else names[0])
+    lw = plt.rcParams["lines.linewidth"]
+    small = plt.rcParams["legend.fontsize"]
+    ms = plt.rcParams["lines.markersize"] * 1.3
+
+    def coating(b, key, si):
+        """The branch's coating.KEY (analysis.json), or its SI / t."""
+        c = b.get("coating") or {}
+        if c.get(key) is not None:
+            return c[key]
+        return b[si] / t if b.get(si) is not None else None
+
+    rows = sorted(branches, key=lambda b: coating(b, "h_max_over_t", "h_max"))
+    x = np.array([coating(b, "h_max_over_t", "h_max") for b in rows], float)
+    a_over_t = [coating(b, "contact_radius_over_t", "contact_radius") for b in rows]
+    log_x = x.min() > 0 and x.max() / x.min() >= 8  # as the sweep's figure
+    # The indenter's compliance (1 - ν_i²)/E_i, which E_r holds beside the specimen's.
+    indenter_E = indenter.get("E")
+    compliance = (1 - indenter.get("nu", 0.07) ** 2) / indenter_E if isinstance(indenter_E, (int, float)) else 0.0
+
+    def reduced(e_star):
+        return 1.0 / (1.0 / e_star + compliance)
+
+    # Their own E/(1 - ν²); under an elastic indenter their own E_r against it, as the data are.
+    modulus = "own $E_\\mathrm{r}$" if compliance else "own $E/(1-ν^2)$"
+    gpa = ip.Unit("GPa", 1e9)
+
+    def series(ax, key, true_key, unit):
+        """The Oliver-Pharr values and the true contact's against h_max/t (where there are any)."""
+        drawn = False
+        for k, label, marker, colour in ((key, "Oliver–Pharr", "o", ip.LOADING),
+                                         (true_key, "true contact", "s", ip.RELOADING)):
+            pairs = [(xi, b[k]) for xi, b in zip(x, rows) if b.get(k) is not None]
+            if pairs:
+                ax.plot([p[0] for p in pairs], [unit(p[1]) for p in pairs], "-" + marker, color=colour, ms=ms,
+                        lw=lw * 0.6, label=label, zorder=4)
+                drawn = True
+        return drawn
+
+    # Left: E_r, the film's and the region below's references, Gao's model.
+    panels = [ax_h]
+    if series(ax_e, "E_r", "true_E_r", gpa):
+        panels.insert(0, ax_e)
+        if axi:
+            gao = [reduced(gao_contact_modulus(film, below, 1.0 / r)) if r else None for r in a_over_t]
+            pairs = [(xi, g) for xi, g in zip(x, gao) if g is not None]
+            ax_e.plot([p[0] for p in pairs], [gpa(p[1]) for p in pairs], "-", color=ip.THEORY, lw=lw,
+                      label="Gao, Chiu & Lee 1992 at $a/t$", zorder=3)
+            true_a = [b.get("true_contact_radius") for b in rows]
+            if any(true_a) and any(b.get("true_E_r") is not None for b in rows):
+                pairs = [(xi, reduced(gao_contact_modulus(film, below, t / a))) for xi, a in zip(x, true_a) if a]
+                ax_e.plot([p[0] for p in pairs], [gpa(p[1]) for p in pairs], "--", color=ip.THEORY, lw=lw * 0.8,
+                          label="Gao, Chiu & Lee 1992 at the true $a/t$", zorder=3)
+        # The references, dotted, named on a second E axis at the right (clear of the data).
+        references = [(words, gpa(reduced(ip.e_star(m)))) for words, m in ((film_name, film), (below_name, below))
+                      if m.get("E")]
+        for k, (_, y) in enumerate(references):
+            ax_e.axhline(y, color="#777777", ls=":", lw=1.2, zorder=2,
+                         label=None if k else f"{', '.join(w for w, _ in references)}: {modulus}")
+        if references:
+            lo, hi = ax_e.get_ylim()
+            lo, hi = min([lo] + [y for _, y in references]), max([hi] + [y for _, y in references])
+            ax_e.set_ylim(lo - 0.05 * (hi - lo), hi + 0.05 * (hi - lo))
+            right = ax_e.secondary_yaxis("right")
+            right.set_yticks([y for _, y in references],
+                             [f"{words}\n{ip.number(y, 3)} {gpa.name}" for words, y in references])
+            right.get_yaxis().set_minor_locator(plt.NullLocator())
+            right.tick_params(labelsize=small * 0.95, colors="#555555", pad=2)
+        # The legend under the panel (below its depth axis's label), where it hides neither the data
+        # nor the references: two columns on a slide, one in a journal column.
+        under = transforms.offset_copy(ax_e.transAxes, ax_e.figure, y=-3.0 * plt.rcParams["axes.labelsize"],
+                                       units="points")
+        ax_e.legend(loc="upper center", bbox_to_anchor=(0.5, 0.0), bbox_transform=under,
+                    ncol=2 if slide else 1, fontsize=small * 0.95)
+        ax_e.set_ylabel(f"$E_\\mathrm{{r}}$ [{gpa.name}]")
+    else:  # plane strain: no E_r; the panel says so, as the sweep's empty panels do
+        ax_e.text(0.5, 0.5, "no reduced modulus $E_\\mathrm{r}$" + (" in plane strain" if not axi else ""),
+                  ha="center", va="center", transform=ax_e.transAxes, color="#555555", fontsize=small)
+        ax_e.set_xticks([])
+        ax_e.set_yticks([])
+        for spine in ax_e.spines.values():
+            spine.set_color("#dddddd")
+    ax_e.set_title("substrate effect: reduced modulus")
+    # Right: the hardness, Oliver-Pharr and true.
+    hardness = [v for b in rows for v in (b.get("H"), b.get("true_H")) if v is not None]
+    h_unit = ip.stress_unit(max(hardness)) if hardness else gpa
+    if series(ax_h, "H", "true_H", h_unit):
+        ax_h.legend(loc="best", fontsize=small * 0.95)
+    ax_h.set_title("substrate effect: hardness")
+    ax_h.set_ylabel(f"hardness $H$ [{h_unit.name}]")
+    for ax in panels:
+        ax.set_xlabel(f"$h_\\mathrm{{max}}/t$ ($t$ = {ip.length_unit(t).text(t)}, {film_name})")
+        if log_x:
+            ax.set_xscale("log")
+            ax.set_xticks(x)
+            ax.get_xaxis().set_minor_formatter(plt.NullFormatter())
+            ax.get_xaxis().set_major_formatter(plt.FuncFormatter(lambda v, _: ip.number(v, 2)))
+        # Each branch's a/t (the Oliver-Pharr contact radius), where Gao's model is evaluated.
+        top = ax.secondary_xaxis("top")
+        top.set_xticks([xi for xi, r in zip(x, a_over_t) if r], [ip.number(r, 2) for r in a_over_t if r])
+        top.get_xaxis().set_minor_locator(plt.NullLocator())
+        top.tick_params(labelsize=small * 0.9, pad=1)
+        top.set_xlabel("$a/t$ (Oliver–Pharr $a$)" if axi else "$a/t$ ($a$ the half-width)", fontsize=small,
+                       labelpad=2)
 
 
 # --- sweep.png ------------------------------------------------------------------------------------

@@ -21,12 +21,7 @@ using indentsim::testing::shipped_case;
 
 namespace {
 
-std::vector<IncrementRecord> run_rows(const LoadCase& lc) {
-  Simulation sim(lc);
-  std::vector<IncrementRecord> rows;
-  sim.run([&](const IncrementRecord& r) { rows.push_back(r); });
-  return rows;
-}
+using indentsim::testing::run_rows;
 
 std::string berkovich_area() {
   const double tan = std::tan(70.3 * std::numbers::pi / 180.0);

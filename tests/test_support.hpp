@@ -18,6 +18,7 @@
 #include "indentsim/input/load_case.hpp"
 #include "indentsim/geometry/mesh.hpp"
 #include "indentsim/materials/material.hpp"
+#include "indentsim/simulation/simulation.hpp"
 
 namespace indentsim::testing {
 
@@ -152,6 +153,14 @@ protected:
     EXPECT_FALSE(std::filesystem::exists(never));
   }
 };
+
+/// The rows of a whole run of `lc`, one per increment.
+inline std::vector<IncrementRecord> run_rows(const LoadCase& lc) {
+  Simulation sim(lc);
+  std::vector<IncrementRecord> rows;
+  sim.run([&](const IncrementRecord& r) { rows.push_back(r); });
+  return rows;
+}
 
 inline std::string source_path(const std::string& relative) { return std::string(INDENTSIM_SOURCE_DIR) + "/" + relative; }
 
