@@ -438,3 +438,57 @@ fields_every = 0
   EXPECT_EQ(indentsim::testing::curve_without_timing(dir_ / "killed" / "curve.csv"),
             indentsim::testing::curve_without_timing(dir_ / "full" / "curve.csv"));
 }
+
+TEST_F(LayersCli, AnalyzeWarnsWhereTheSubstrateMovesTheFilmsResultsAndNotUnderAThickFilm) {
+  // A flat punch (radius a = 50 um) on a film twice as stiff as its substrate: at t = a the
+  // substrate takes a third of the apparent modulus away (Gao's weight 0.48); at t = 40 a about
+  // 1.5%, inside the default 2%.  Measured against the film alone's companion run.
+  for (const double t_over_a : {1.0, 40.0}) {
+    SCOPED_TRACE(t_over_a);
+    const fs::path file = dir_ / "coated_flat.toml";
+    std::ofstream(file) << fmt::format(R"(
+[geometry]
+kind = "axisymmetric"
+lx = 20e-3
+ly = 20e-3
+[punch]
+shape = "flat"
+radius = 50e-6
+[material]
+model = "elastic"
+E = 70e9
+nu = 0.2
+[[layer]]
+thickness = {}
+[layer.material]
+model = "elastic"
+E = 140e9
+nu = 0.2
+[load]
+path = [0.0, 0.5e-6, 0.3e-6]
+increments = [5, 10]
+[mesh]
+contact_nodes = 10
+error_estimate = "off"
+)",
+                                       t_over_a * 50e-6);
+    const fs::path out = dir_ / fmt::format("t{}", t_over_a);
+    ASSERT_EQ(cli("run " + file.string() + " --quiet --out " + out.string()), 0) << err();
+    ASSERT_EQ(cli("analyze " + out.string()), 0) << err();
+    EXPECT_EQ(err().find("the substrate moves") != std::string::npos, t_over_a < 10.0) << err();
+    const auto analysis = nlohmann::json::parse(indentsim::testing::slurp(out / "analysis.json"));
+    const auto& coating = analysis["branches"][0]["coating"];
+    ASSERT_TRUE(coating["film_alone_E_r"].is_number()) << analysis["branches"][0].dump(2);
+    const double change = analysis["branches"][0]["E_r"].get<double>() / coating["film_alone_E_r"].get<double>() - 1.0;
+    // Between Gao's weight applied to the moduli (his first order: E* = E*_s + (E*_f - E*_s) I0)
+    // and the same weight applied to the compliances (1/E* = I0/E*_f + (1 - I0)/E*_s): a stiff
+    // film's modulus falls faster than linearly as the substrate's share grows.
+    const double I0 = gao_weights(t_over_a, 0.2).I0;
+    const double in_moduli = -0.5 * (1.0 - I0), in_compliances = 1.0 / (2.0 - I0) - 1.0;
+    std::cout << fmt::format("t/a = {}: E_r moved by {:.4f} from the film alone's; Gao's weight on the moduli {:.4f}, "
+                             "on the compliances {:.4f}\n",
+                             t_over_a, change, in_moduli, in_compliances);
+    EXPECT_LT(change, in_moduli);
+    EXPECT_GT(change, in_compliances);
+  }
+}

@@ -1,5 +1,7 @@
 #include "indentsim/analysis/curve_analysis.hpp"
 
+#include "indentsim/simulation/simulation.hpp"
+
 #include <cmath>
 #include <fstream>
 #include <tuple>
@@ -97,7 +99,76 @@ void analyze_branches(CurveAnalysis& c, const std::vector<CurveBranch>& branches
   }
 }
 
+/// The substrate's effect, measured (docs/MODEL.md §14.4): the film alone -- the run's case with
+/// its top layer's material as the whole specimen's, on the same load path, mesh keys and pilot
+/// measurements (case.toml records them) -- is run and analysed as the run was, and each of the
+/// run's branches gets the film alone's E_r and H of the same branch.  Under force control the
+/// film alone reaches its own depths (its depth pilot runs anew).
+void measure_substrate_effect(CurveAnalysis& c, const LoadCase& lc) {
+  LoadCase film = lc;
+  film.material = lc.layers.front().material;
+  film.layers.clear();
+  film.mesh.error_estimate = ErrorEstimateChoice::off;
+  if (film.load.control == LoadControlKind::force) film.load.depth_estimate.reset();
+  CurveAnalysis alone = c;
+  alone.coating.reset();
+  alone.branches.clear();
+  alone.depth.clear();
+  alone.force.clear();
+  try {
+    Simulation sim(film);
+    sim.run([&](const IncrementRecord& r) {
+      alone.depth.push_back(r.alpha);
+      alone.force.push_back(r.force);
+    });
+  } catch (const SolverError&) {
+    return;  // the film alone does not reach the run's path: no measured substrate effect
+  }
+  if (alone.depth.size() != c.depth.size()) return;
+  std::vector<double> controlled = alone.depth;
+  if (lc.load.control == LoadControlKind::force) controlled = plan_increments(lc.load);
+  std::vector<CurveBranch> branches;
+  for (const CurveBranch& b : unloading_branches(controlled))
+    if (b.end < alone.depth.size()) branches.push_back(b);
+  try {
+    analyze_branches(alone, branches, [](const CurveBranch& b) { return fmt::format("steps {}-{}", b.peak, b.end); },
+                     [](const CurveBranch&) { return std::optional<TrueContact>(); });
+  } catch (const InputError&) {
+    return;  // a branch the film alone cannot analyse: none measured
+  }
+  for (AnalyzedBranch& b : c.branches) {
+    if (!b.result.coating) continue;
+    for (const AnalyzedBranch& f : alone.branches)
+      if (f.branch.peak == b.branch.peak) {
+        b.result.coating->film_alone_reduced_modulus = f.result.reduced_modulus;
+        b.result.coating->film_alone_hardness = f.result.hardness;
+      }
+  }
+}
+
 }  // namespace
+
+std::vector<std::string> substrate_effect_warnings(const CurveAnalysis& c) {
+  std::vector<std::string> warnings;
+  const double tolerance = c.settings.substrate_tolerance;
+  for (const AnalyzedBranch& b : c.branches) {
+    if (!b.result.coating) continue;
+    const auto& co = *b.result.coating;
+    std::string moved;
+    if (co.film_alone_reduced_modulus && b.result.reduced_modulus &&
+        std::abs(*b.result.reduced_modulus / *co.film_alone_reduced_modulus - 1.0) > tolerance)
+      moved += fmt::format("E_r by {:+.3g}%", 100.0 * (*b.result.reduced_modulus / *co.film_alone_reduced_modulus - 1.0));
+    if (co.film_alone_hardness && *co.film_alone_hardness > 0.0 &&
+        std::abs(b.result.hardness / *co.film_alone_hardness - 1.0) > tolerance)
+      moved += fmt::format("{}H by {:+.3g}%", moved.empty() ? "" : " and ",
+                           100.0 * (b.result.hardness / *co.film_alone_hardness - 1.0));
+    if (moved.empty()) continue;
+    warnings.push_back(fmt::format("{} (h_max/t = {:.3g}): the substrate moves {} from the film alone's, beyond "
+                                   "analysis.substrate_tolerance = {:g}: these are not the film's properties",
+                                   b.label, co.depth_over_thickness, moved, tolerance));
+  }
+  return warnings;
+}
 
 bool is_run_output(const fs::path& path) {
   std::error_code ec;
@@ -156,6 +227,7 @@ CurveAnalysis analyze_run_curve(const fs::path& path, const std::vector<std::str
                      if (truth == truths.end()) return std::nullopt;
                      return truth->second;
                    });
+  if (!lc.layers.empty()) measure_substrate_effect(c, lc);
   return c;
 }
 
@@ -354,6 +426,9 @@ std::string analysis_table(const CurveAnalysis& c) {
                            ? ", with the true contact " + TableUnits::stress(co.film_modulus_gao_true_contact)
                            : std::string(),
                        TableUnits::stress(co.film_modulus));
+      if (co.film_alone_reduced_modulus)
+        t += fmt::format("    the film alone (a companion run): E_r = {}, H = {}\n",
+                         TableUnits::stress(co.film_alone_reduced_modulus), TableUnits::stress(co.film_alone_hardness));
     }
     if (a.hold) {
       const HoldAnalysis& h = *a.hold;

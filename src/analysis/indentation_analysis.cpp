@@ -413,7 +413,9 @@ nlohmann::ordered_json branch_json(const BranchAnalysis& a, const AnalysisContex
                     {"film_share_gao_I0", a.coating->film_share},
                     {"film_E_gao", number_or_null(a.coating->film_modulus_gao)},
                     {"film_E_gao_true_contact", number_or_null(a.coating->film_modulus_gao_true_contact)},
-                    {"film_E_true", a.coating->film_modulus}};
+                    {"film_E_true", a.coating->film_modulus},
+                    {"film_alone_E_r", number_or_null(a.coating->film_alone_reduced_modulus)},
+                    {"film_alone_H", number_or_null(a.coating->film_alone_hardness)}};
   if (a.hold) {
     const HoldAnalysis& h = *a.hold;
     nlohmann::ordered_json hold{{"start_index", h.start},       {"duration_s", h.duration},

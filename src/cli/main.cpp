@@ -240,6 +240,7 @@ int command_analyze(const std::string& curve, const std::vector<std::string>& ov
   write_file_atomically(out, analysis_json(analysis).dump(2) + "\n");
   fmt::print("{}analysis: {}\n", analysis_table(analysis), out.string());
   for (const std::string& w : implausible_results(analysis)) fmt::print(stderr, "warning: {}\n", w);
+  for (const std::string& w : substrate_effect_warnings(analysis)) fmt::print(stderr, "warning: {}\n", w);
   if (plot) exec_python({script.string(), "--analysis", out.string()}, curve);
   return 0;
 }

@@ -693,6 +693,10 @@ const std::vector<KeyDeclaration>& key_declarations() {
                                     [](auto& c) -> auto& { return c.analysis.indenter_E; }), 1e3, 2e12, "the moduli of solids", [](auto& c) -> auto& { return c.analysis.indenter_E; }));
     k.push_back(number_key({"analysis", "indenter_nu", "number", "(-1, 0.5)", "", "the indenter's Poisson's ratio"},
                            [](auto& c) -> auto& { return c.analysis.indenter_nu; }));
+    k.push_back(number_key({"analysis", "substrate_tolerance", "number", "(0, 1)", "",
+                            "a coated run's `analyze` warns where the substrate moves E_r or H by more than this "
+                            "fraction from the film's own (a companion run of the film alone; docs/MODEL.md §14.4)"},
+                           [](auto& c) -> auto& { return c.analysis.substrate_tolerance; }));
     k.push_back(number_key({"solver", "tolerance", "number", "[1e-14, 1e-2)", "",
                             "residual max-norm relative to E* times the deepest depth (times 2 pi a* in axisymmetry: ring forces)"},
                            [](auto& c) -> auto& { return c.solver.tolerance; },

@@ -49,6 +49,9 @@ struct CurveAnalysis {
 /// outside 1e3-2e12 Pa): a depth in nm declared as m, a force in mN as N, give H off by 1e3-1e18.
 std::vector<std::string> implausible_results(const CurveAnalysis& analysis);
 
+/// A coated run's branches where the substrate moves E_r or H by more than
+/// analysis.substrate_tolerance from the film alone's (docs/MODEL.md §14.4), one warning each.
+std::vector<std::string> substrate_effect_warnings(const CurveAnalysis& analysis);
 /// True when `path` is a run's folder, or the curve.csv in one (beside its case.toml).
 bool is_run_output(const std::filesystem::path& path);
 

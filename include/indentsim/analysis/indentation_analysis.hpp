@@ -124,6 +124,9 @@ struct BranchAnalysis {
     /// without Oliver and Pharr's error in the contact area.
     std::optional<double> film_modulus_gao_true_contact;
     double film_modulus = 0.0;
+    /// The film alone on the same load path and mesh plan, analysed alike (analyze_run_curve's
+    /// companion run): its E_r and H, what the substrate moves.
+    std::optional<double> film_alone_reduced_modulus, film_alone_hardness;
   };
   std::optional<Coating> coating;
 };

@@ -209,6 +209,9 @@ struct AnalysisInput {
   double beta = 1.0;                         ///< E_r = sqrt(pi) / (2 beta) S / sqrt(A) (1.034: Berkovich)
   std::optional<double> indenter_E;          ///< [Pa]; none: a rigid indenter
   double indenter_nu = 0.07;                 ///< diamond
+  /// A coated run's analysis warns where the substrate moves E_r or H by more than this fraction
+  /// from the film's own (docs/MODEL.md §14.4).
+  double substrate_tolerance = 0.02;
 };
 
 /// How the contact conditions become equations (docs/MODEL.md §3).
