@@ -12,7 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "indentsim/geometry/kinematics.hpp"
-#include "indentsim/solvers/layer_forces.hpp"
+#include "indentsim/solvers/line_forces.hpp"
 #include "indentsim/geometry/mesh.hpp"
 #include "indentsim/simulation/simulation.hpp"
 #include "test_support.hpp"
@@ -236,7 +236,7 @@ TEST(AxisymmetricLayers, TheForceAcrossEveryLineIsP) {
     sim.run();
     const double force = sim.contact().force;
     ASSERT_GT(force, 0.0);
-    const auto layers = layer_forces(sim.mesh(), sim.bulk());
+    const auto layers = line_forces(sim.mesh(), sim.bulk());
     for (std::size_t j = 0; j < layers.size(); ++j) {
       if (!std::isnan(layers[j].below)) {
         EXPECT_NEAR(layers[j].below, force, 1e-8 * force) << "line " << j;

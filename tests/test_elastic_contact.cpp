@@ -72,7 +72,7 @@ TEST(ElasticContact, EveryMeshLineCarriesThePunchForce) {
   sim.run();
   const double force = sim.contact().force;
   ASSERT_GT(force, 0.0);
-  const auto layers = sim.layer_forces();
+  const auto layers = sim.line_forces();
   ASSERT_EQ(static_cast<int>(layers.size()), sim.mesh().nodes_y());
   for (std::size_t j = 0; j < layers.size(); ++j) {
     if (j > 0) {

@@ -19,7 +19,7 @@ namespace {
 
 void expect_finite_difference_equations_hold(const Simulation& sim) {
   const Mesh& mesh = sim.mesh();
-  const auto layer = nodal_layer_forces(mesh, sim.bulk());
+  const auto layer = nodal_line_forces(mesh, sim.bulk());
   // Scale: the largest nodal layer force anywhere.
   double scale = 0;
   for (const auto& l : layer) scale = std::max({scale, std::abs(l.normal_below), std::abs(l.tangential_below)});
@@ -65,7 +65,7 @@ TEST(FiniteDifferenceView, TopLayerForceIsTheContactReaction) {
     Simulation sim(shipped_case(name, {"load.increments=3", "mesh.contact_nodes=8"}));
     IncrementRecord last;
     sim.run([&](const IncrementRecord& r) { last = r; });
-    const auto layer = nodal_layer_forces(sim.mesh(), sim.bulk());
+    const auto layer = nodal_line_forces(sim.mesh(), sim.bulk());
     const auto& u = sim.displacement();
     const double alpha = sim.alpha(), P = last.force;
     ASSERT_GT(P, 0.0);
@@ -102,7 +102,7 @@ double layer_pressure_error(int contact_nodes) {
   sim.run();
   const auto& lc = sim.load_case();
   const double e_star = lc.material.E / (1 - lc.material.nu * lc.material.nu);
-  const auto layer = nodal_layer_forces(sim.mesh(), sim.bulk());
+  const auto layer = nodal_line_forces(sim.mesh(), sim.bulk());
   const ContactResult c = sim.contact();
   const double a = hertz::half_width(c.force, lc.punch.radius, e_star);
   const double p0 = 2 * c.force / (std::numbers::pi * a);

@@ -39,7 +39,7 @@ HardRun run_hard(const std::string& name, std::vector<std::string> overrides = {
   });
   const double force = sim.contact().force;
   if (force > 0)
-    for (const auto& l : sim.layer_forces()) {
+    for (const auto& l : sim.line_forces()) {
       if (!std::isnan(l.below)) h.worst_layer_mismatch = std::max(h.worst_layer_mismatch, std::abs(l.below - force) / force);
       if (!std::isnan(l.above)) h.worst_layer_mismatch = std::max(h.worst_layer_mismatch, std::abs(l.above - force) / force);
     }

@@ -19,7 +19,7 @@
 #include "indentsim/geometry/mesh.hpp"
 #include "indentsim/input/load_case.hpp"
 #include "indentsim/simulation/simulation.hpp"
-#include "indentsim/solvers/layer_forces.hpp"
+#include "indentsim/solvers/line_forces.hpp"
 #include "test_support.hpp"
 
 namespace fs = std::filesystem;
@@ -182,7 +182,7 @@ TEST(Layers, TractionsAreContinuousAcrossAnInterfaceAndTheLayersAreInEquilibrium
       sim.run();
       const Mesh& mesh = sim.mesh();
       const double force = sim.contact().force;
-      for (const LayerForce& line : layer_forces(mesh, sim.bulk())) {
+      for (const LineForce& line : line_forces(mesh, sim.bulk())) {
         if (!std::isnan(line.below)) EXPECT_NEAR(line.below, force, 1e-8 * force);
         if (!std::isnan(line.above)) EXPECT_NEAR(line.above, force, 1e-8 * force);
       }

@@ -101,7 +101,7 @@ TEST(PlasticContact, LayerEquilibriumHoldsWithSecantMatrices) {
   sim.run();
   ASSERT_GT(sim.bulk().plastic_points(), 100);
   const double force = sim.contact().force;
-  const auto layers = sim.layer_forces();
+  const auto layers = sim.line_forces();
   for (std::size_t j = 0; j < layers.size(); ++j) {
     if (j > 0) {
       EXPECT_NEAR(layers[j].below, force, 1e-8 * force) << "line " << j;

@@ -50,7 +50,7 @@ NodalStresses average_to_nodes(const Mesh& mesh, const BulkModel& bulk) {
   return nodal;
 }
 
-std::string layers_csv(const std::vector<LayerForce>& layers, double punch_force, const FieldFrame& frame, bool header) {
+std::string layers_csv(const std::vector<LineForce>& layers, double punch_force, const FieldFrame& frame, bool header) {
   std::string out = header ? "step,alpha,line,y,P_minus,P_plus,mismatch,P\n" : "";
   for (std::size_t j = 0; j < layers.size(); ++j) {
     const auto& l = layers[j];
@@ -74,7 +74,7 @@ std::vector<int> profile_lines(const Mesh& mesh, const std::vector<double>& dept
   return lines;
 }
 
-std::string profiles_csv(const Mesh& mesh, const std::vector<int>& lines, const std::vector<NodalLayerForces>& layer,
+std::string profiles_csv(const Mesh& mesh, const std::vector<int>& lines, const std::vector<NodalLineForces>& layer,
                          const NodalStresses& nodal, const FieldFrame& frame, bool header) {
   // sigmaN_layer = sigma_N^- / w ~ sigma22 and sigmaT_layer = sigma_T^- / w ~ sigma12 just below
   // the line (from the local stiffness rows); the *_nodal columns are the Gauss-point stresses

@@ -382,9 +382,9 @@ void RunOutput::record_true_contact(const IncrementSnapshot& state, int step) {
 std::pair<std::string, std::string> RunOutput::layer_tables(const IncrementSnapshot& state, int step,
                                                             bool header) const {
   const Mesh& mesh = state.mesh;
-  const auto layer = nodal_layer_forces(mesh, state.bulk);
+  const auto layer = nodal_line_forces(mesh, state.bulk);
   const FieldFrame frame{step, state.alpha};
-  return {layers_csv(layer_forces(mesh, layer), state.contact().force, frame, header),
+  return {layers_csv(line_forces(mesh, layer), state.contact().force, frame, header),
           profiles_csv(mesh, profile_lines(mesh, profile_depths_), layer, average_to_nodes(mesh, state.bulk), frame,
                        header)};
 }

@@ -848,8 +848,8 @@ std::optional<Simulation::Sensitivities> Simulation::sensitivities(const std::ve
   return result;
 }
 
-std::vector<LayerForce> Simulation::layer_forces() const {
-  return indentsim::layer_forces(*mesh_, *bulk_);
+std::vector<LineForce> Simulation::line_forces() const {
+  return indentsim::line_forces(*mesh_, *bulk_);
 }
 
 void Simulation::check_fine_zone(double half_width) {

@@ -1,6 +1,6 @@
 #include "indentsim/solvers/contact.hpp"
 
-#include "indentsim/solvers/layer_forces.hpp"
+#include "indentsim/solvers/line_forces.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -12,7 +12,7 @@
 
 #include "indentsim/solvers/assembly.hpp"
 #include "indentsim/solvers/contact.hpp"
-#include "indentsim/solvers/layer_forces.hpp"
+#include "indentsim/solvers/line_forces.hpp"
 #include "indentsim/geometry/mesh.hpp"
 
 namespace indentsim {
@@ -37,11 +37,11 @@ struct FieldFrame {
 };
 
 /// The layer forces of one state; `header` starts the table with its column names.
-std::string layers_csv(const std::vector<LayerForce>& layers, double punch_force, const FieldFrame& frame, bool header);
+std::string layers_csv(const std::vector<LineForce>& layers, double punch_force, const FieldFrame& frame, bool header);
 
 /// Mesh lines of the profiles: the top surface and, for each depth, the nearest mesh line.
 std::vector<int> profile_lines(const Mesh& mesh, const std::vector<double>& depths);
-std::string profiles_csv(const Mesh& mesh, const std::vector<int>& lines, const std::vector<NodalLayerForces>& layer,
+std::string profiles_csv(const Mesh& mesh, const std::vector<int>& lines, const std::vector<NodalLineForces>& layer,
                          const NodalStresses& nodal, const FieldFrame& frame, bool header);
 
 /// A VTK XML unstructured grid of the current state.

@@ -12,7 +12,7 @@
 #include "indentsim/solvers/assembly.hpp"
 #include "indentsim/solvers/condensation.hpp"
 #include "indentsim/solvers/contact.hpp"
-#include "indentsim/solvers/layer_forces.hpp"
+#include "indentsim/solvers/line_forces.hpp"
 #include "indentsim/input/load_case.hpp"
 #include "indentsim/simulation/increment_snapshot.hpp"
 #include "indentsim/simulation/load_control.hpp"
@@ -103,7 +103,7 @@ public:
   /// The depth at which the punch would first touch the current surface (touch_depth): after
   /// separation, the residual depth of the imprint where the punch left it.
   double free_surface_depth() const;
-  std::vector<LayerForce> layer_forces() const;
+  std::vector<LineForce> line_forces() const;
   /// dP/d(theta) and du/d(theta) at the current state for each parameter, by forward sensitivity
   /// through the converged Newton system: at fixed depth F(u(theta); theta) = 0, so J du/d(theta) =
   /// -dF/d(theta) (one factorization of J at u, one solve per parameter), and P = -f sum r_k over

@@ -34,7 +34,7 @@ struct ContactCandidate {
   double x = 0.0;              ///< abscissa [m]
   double surface_height = 0.0; ///< g(x) [m]
   double scale = 0.0;          ///< c_k = K_kk [N/m^2]
-  double tributary_measure = 0.0;  ///< the node's strip of surface (tributary_measure of layer_forces.hpp) [m or m^2]
+  double tributary_measure = 0.0;  ///< the node's strip of surface (tributary_measure of line_forces.hpp) [m or m^2]
   /// Equation of the node's horizontal (radial) unknown, -1 where a symmetry condition fixes it
   /// (the axis node); its diagonal stiffness.  Only frictional rows use them.
   int tangential_equation = -1;

@@ -1,11 +1,11 @@
-#include "indentsim/solvers/layer_forces.hpp"
+#include "indentsim/solvers/line_forces.hpp"
 
 #include <limits>
 
 namespace indentsim {
 
-std::vector<NodalLayerForces> nodal_layer_forces(const Mesh& mesh, const BulkModel& bulk) {
-  std::vector<NodalLayerForces> nodal(static_cast<std::size_t>(mesh.nodes()));
+std::vector<NodalLineForces> nodal_line_forces(const Mesh& mesh, const BulkModel& bulk) {
+  std::vector<NodalLineForces> nodal(static_cast<std::size_t>(mesh.nodes()));
   for (int ei = 0; ei < mesh.elements_x(); ++ei)
     for (int ej = 0; ej < mesh.elements_y(); ++ej) {
       const ElementVector fe = bulk.element_force(ei, ej);
@@ -30,9 +30,9 @@ double tributary_measure(const Mesh& mesh, int i) {
   return mesh.kinematics().tributary_measure(left, mesh.x(i), right);
 }
 
-std::vector<LayerForce> layer_forces(const Mesh& mesh, const std::vector<NodalLayerForces>& nodal) {
+std::vector<LineForce> line_forces(const Mesh& mesh, const std::vector<NodalLineForces>& nodal) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  std::vector<LayerForce> layers(static_cast<std::size_t>(mesh.nodes_y()));
+  std::vector<LineForce> layers(static_cast<std::size_t>(mesh.nodes_y()));
   const double whole_body = mesh.kinematics().symmetry_factor();
   for (int j = 0; j < mesh.nodes_y(); ++j) {
     double below = 0.0, above = 0.0;
@@ -47,8 +47,8 @@ std::vector<LayerForce> layer_forces(const Mesh& mesh, const std::vector<NodalLa
   return layers;
 }
 
-std::vector<LayerForce> layer_forces(const Mesh& mesh, const BulkModel& bulk) {
-  return layer_forces(mesh, nodal_layer_forces(mesh, bulk));
+std::vector<LineForce> line_forces(const Mesh& mesh, const BulkModel& bulk) {
+  return line_forces(mesh, nodal_line_forces(mesh, bulk));
 }
 
 }  // namespace indentsim

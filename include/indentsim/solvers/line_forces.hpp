@@ -2,6 +2,10 @@
 // The paper's finite-difference view of equilibrium (docs/MODEL.md §7;
 // Yazici 2023, section "Obtaining the Finite Difference Equation at Any Point").
 //
+// The paper calls a horizontal line of nodes a layer and these its layer forces; here they are
+// line forces, as a layer is a coating's (docs/MODEL.md §14).  The output file keeps the paper's
+// name, layers.csv.
+//
 // At node (i, j), multiplying rows of the current (secant) local stiffness matrices by the
 // element unknowns gives the paper's layer quantities:
 //   sigma_N^- : rows 6 and 8 (v of vertices 2, 4) of the elements below the node,
@@ -25,19 +29,19 @@
 namespace indentsim {
 
 /// The paper's sigma_N^-, sigma_N^+, sigma_T^-, sigma_T^+ at one node [N/m, or N].
-struct NodalLayerForces {
+struct NodalLineForces {
   double normal_below = 0.0, normal_above = 0.0;
   double tangential_below = 0.0, tangential_above = 0.0;
 };
 
 /// Layer forces at every node of the committed state, indexed by Mesh::node(i, j).
-std::vector<NodalLayerForces> nodal_layer_forces(const Mesh& mesh, const BulkModel& bulk);
+std::vector<NodalLineForces> nodal_line_forces(const Mesh& mesh, const BulkModel& bulk);
 
 /// Tributary measure of node i of a horizontal line (Kinematics::tributary_measure): half of
 /// each adjacent element in plane strain [m], the consistent ring area in axisymmetry [m^2].
 double tributary_measure(const Mesh& mesh, int i);
 
-struct LayerForce {
+struct LineForce {
   double y = 0.0;
   /// P^-(y_j) = -f sum_i sigma_N^-(i, j) (NaN on the base, which has no elements below).
   double below = 0.0;
@@ -46,7 +50,7 @@ struct LayerForce {
 };
 
 /// Layer forces for every horizontal mesh line, of the whole body (in the unit of P).
-std::vector<LayerForce> layer_forces(const Mesh& mesh, const std::vector<NodalLayerForces>& nodal);
-std::vector<LayerForce> layer_forces(const Mesh& mesh, const BulkModel& bulk);
+std::vector<LineForce> line_forces(const Mesh& mesh, const std::vector<NodalLineForces>& nodal);
+std::vector<LineForce> line_forces(const Mesh& mesh, const BulkModel& bulk);
 
 }  // namespace indentsim
