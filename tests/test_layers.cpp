@@ -98,6 +98,14 @@ TEST(Layers, ALayerOfTheSubstratesOwnMaterialOnAMeshLineIsTheHomogeneousSpecimen
     }
 }
 
+TEST(Layers, ALayersImplausibleValueIsWarnedNamingTheLayer) {
+  LoadCase lc = small_sphere_case(SceneKind::axisymmetric, MaterialModel::elastic, HardeningLaw::linear);
+  lc = with_layer(lc, 1e-5, elastic(400, 0.25));  // GPa meant, Pa written
+  const std::vector<std::string> warnings = implausible_values(lc);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_EQ(warnings[0].rfind("layer[1].material.E = 400", 0), 0u) << warnings[0];
+}
+
 TEST(Layers, InterfacesAreMeshLinesAndEveryLayerHasItsRows) {
   // docs/MODEL.md §14.3: every interface a node row; at least 4 rows per layer however thin; no
   // element more than twice its neighbour once a thin film refined the rows near it.
@@ -261,6 +269,12 @@ TEST(Layers, BadLayersAreRefusedNamingTheLayerAndTheKey) {
   EXPECT_EQ(refused_key(film + layer("-1e-6")), "layer[2].thickness");
   EXPECT_EQ(refused_key(layer("0.02")), "layer[1].thickness");            // deeper than geometry.ly
   EXPECT_EQ(refused_key(film + layer("0.99999e-2")), "layer[2].thickness");  // the stack reaches geometry.ly
+  // Interfaces double precision cannot tell apart (1e-4 + 1e-21 == 1e-4), or a film of a denormal's
+  // thickness, would give rows of no height: refused below 1e-9 of the specimen's depth.
+  EXPECT_EQ(refused_key(layer("1e-4") + layer("1e-21")), "layer[2].thickness");
+  EXPECT_EQ(refused_key(layer("1e-323")), "layer[1].thickness");
+  EXPECT_EQ(refused_key(layer("2e-11")), "");  // twice 1e-9 of ly = 10 mm: a film of 0.02 nm still runs
+  EXPECT_EQ(refused_key(layer("0.9999999999e-2")), "layer[1].thickness");     // the substrate within 1e-9 of it
   EXPECT_EQ(refused_key(layer("\"thin\"")), "layer[1].thickness");
   EXPECT_EQ(refused_key("\n[[layer]]\nmaterial = { model = \"elastic\", E = 1e9, nu = 0.3 }\n"), "layer[1].thickness");
   EXPECT_EQ(refused_key("\n[[layer]]\nthickness = 1e-5\n"), "layer[1].material");

@@ -123,6 +123,8 @@ void measure_substrate_effect(CurveAnalysis& c, const LoadCase& lc) {
     });
   } catch (const SolverError&) {
     return;  // the film alone does not reach the run's path: no measured substrate effect
+  } catch (const InputError&) {
+    return;  // nor a path valid for the film alone (a force-controlled film deeper than its tip's shape)
   }
   if (alone.depth.size() != c.depth.size()) return;
   std::vector<double> controlled = alone.depth;

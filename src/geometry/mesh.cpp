@@ -116,8 +116,7 @@ std::vector<double> lay_interfaces(std::vector<double> d, const std::vector<doub
     const auto above = std::lower_bound(d.begin(), d.end(), depth);
     std::size_t j = static_cast<std::size_t>(above - d.begin());
     if (j > 0 && (j == d.size() || depth - d[j - 1] < d[j] - depth)) --j;
-    const double local = std::max(j + 1 < d.size() ? d[j + 1] - d[j] : 0.0, j > 0 ? d[j] - d[j - 1] : 0.0);
-    if (std::abs(d[j] - depth) <= 1e-12 * local || !fixed[j]) {
+    if (!fixed[j]) {
       d[j] = depth;  // on the node already, or the nearest free node moved onto it (within half an element)
       fixed[j] = 1;
     } else {
@@ -153,7 +152,8 @@ std::vector<double> lay_interfaces(std::vector<double> d, const std::vector<doub
       double neighbour = size;
       if (i > 0) neighbour = std::min(neighbour, laid[i] - laid[i - 1]);
       if (i + 2 < laid.size()) neighbour = std::min(neighbour, laid[i + 2] - laid[i + 1]);
-      if (size > ratio_limit * neighbour) {
+      // (validate() keeps interfaces apart: every element has a height, and the halving ends)
+      if (size > ratio_limit * neighbour && neighbour > 0.0) {
         next.push_back(laid[i] + 0.5 * size);
         halved = true;
       }

@@ -829,13 +829,13 @@ std::vector<KeyDescription> describe_keys() {
     const auto& key = declarations[i];
     // The [[layer]] tables follow [material], whose keys each layer's material takes.
     if (i > 0 && std::string(declarations[i - 1].section) == "material" && std::string(key.section) != "material") {
-      out.push_back({"layer.thickness", "number", "required", "> 0, the layers' sum < geometry.ly", "m",
+      out.push_back({"layer.thickness", "number", "required", ">= 1e-9 geometry.ly, the layers' sum < geometry.ly", "m",
                      "[[layer]], one per layer from the surface down (docs/MODEL.md §14): the layer's thickness; the "
                      "layers lie on the substrate [material] describes",
                      true, false});
       out.push_back({"layer.material.KEY", "table", "required", "every key of [material], checked as there", "",
                      "[layer.material]: the layer's material, perfectly bonded to its neighbours; addressed as "
-                     "layer.K.material.KEY (K from 1 at the surface) by --set and sweeps (not yet freed by a fit)",
+                     "layer.K.material.KEY (K from 1 at the surface) by --set, sweeps and fit --free",
                      true, false});
     }
     KeyDescription d;
@@ -856,6 +856,10 @@ std::vector<KeyDescription> describe_keys() {
 
 std::vector<std::string> implausible_values(const LoadCase& lc) {
   std::vector<std::string> warnings;
+  // Each layer's material is checked as [material] is, named as the layer's.
+  for (std::size_t k = 0; k < lc.layers.size(); ++k)
+    for (const std::string& w : implausible_values(with_material(lc, lc.layers[k].material)))
+      if (w.rfind("material.", 0) == 0) warnings.push_back(fmt::format("layer[{}].{}", k + 1, w));
   for (const auto& key : key_declarations()) {
     if (!key.plausible || !key.magnitudes) continue;
     const auto& p = *key.plausible;

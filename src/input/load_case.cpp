@@ -365,6 +365,9 @@ static std::vector<LayerInput> read_layers(const toml::node& node, const LoadCas
   const toml::array* layers = node.as_array();
   if (!layers || !layers->is_array_of_tables())
     fail("layer", "must be an array of tables, one [[layer]] per layer from the surface down");
+  if (layers->size() > max_layers)
+    fail("layer", fmt::format("{} layers: at most {} (a finer stack is a graded material, not built)", layers->size(),
+                              max_layers));
   std::vector<KeyDeclaration> material_keys;
   for (const KeyDeclaration& key : key_declarations())
     if (std::string(key.section) == "material") material_keys.push_back(key);

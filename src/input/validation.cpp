@@ -203,11 +203,19 @@ static void validate_layers(const LoadCase& lc) {
     if (!(std::isfinite(layer.thickness) && layer.thickness > 0.0))
       throw InputError(lc.source, name + ".thickness",
                        fmt::format("must be a finite length > 0 (got {})", layer.thickness));
-    depth += layer.thickness;
-    if (!(depth < lc.geometry.ly))
+    // Each interface a mesh line (MODEL.md §14.3), resolved in double precision against the block
+    // (as the depths are: 1e-9 of it), and so is the substrate below the last.
+    const double resolvable = 1e-9 * lc.geometry.ly;
+    if (!(layer.thickness >= resolvable))
       throw InputError(lc.source, name + ".thickness",
-                       fmt::format("the layers reach {} m below the surface, not less than the specimen's depth "
-                                   "(geometry.ly = {} m): the substrate must lie below them",
+                       fmt::format("{:g} m is below what double precision resolves against the specimen's depth "
+                                   "(1e-9 of geometry.ly = {:g} m)",
+                                   layer.thickness, lc.geometry.ly));
+    depth += layer.thickness;
+    if (!(lc.geometry.ly - depth >= resolvable))
+      throw InputError(lc.source, name + ".thickness",
+                       fmt::format("the layers reach {} m below the surface, the specimen's depth (geometry.ly = {} m) "
+                                   "or within 1e-9 of it: the substrate must lie below them",
                                    depth, lc.geometry.ly));
     const LoadCase scratch = with_material(lc, layer.material);
     try {

@@ -124,12 +124,25 @@ ElasticStiffness::ElasticStiffness(const Mesh& mesh, std::vector<ElasticMaterial
     : mesh_(mesh), pattern_(pattern), by_region_(std::move(by_region)) {
   if (static_cast<int>(by_region_.size()) != mesh.regions())
     throw std::invalid_argument("ElasticStiffness: one material per region of the mesh");
-  // One representative rectangle per (column class, height class), a matrix per region on it.
-  for (const Rectangle& rect : mesh.class_rectangles()) {
-    for (const ElasticMaterial& material : by_region_)
-      by_class_.push_back(mesh.kinematics().elastic_stiffness(rect, material.lame(), mesh.element_kind()));
-    quadrature_by_class_.push_back(mesh.kinematics().quadrature(rect, mesh.element_kind()));
+  // One representative rectangle per (column class, height class), its quadrature, and a matrix
+  // per (column class, row class): each (height class, region) pair the rows have.
+  const std::vector<Rectangle> rectangles = mesh.class_rectangles();
+  for (const Rectangle& rect : rectangles) quadrature_by_class_.push_back(mesh.kinematics().quadrature(rect, mesh.element_kind()));
+  for (int ej = 0; ej < mesh.elements_y(); ++ej) {
+    std::size_t c = 0;
+    while (c < row_region_.size() && (row_height_class_[c] != mesh.height_class(ej) || row_region_[c] != mesh.region(ej))) ++c;
+    if (c == row_region_.size()) {
+      row_height_class_.push_back(mesh.height_class(ej));
+      row_region_.push_back(mesh.region(ej));
+    }
+    row_class_.push_back(c);
   }
+  for (int column = 0; column < mesh.column_classes(); ++column)
+    for (std::size_t c = 0; c < row_region_.size(); ++c)
+      by_class_.push_back(mesh.kinematics().elastic_stiffness(
+          rectangles[static_cast<std::size_t>(column) * static_cast<std::size_t>(mesh.height_classes()) +
+                     static_cast<std::size_t>(row_height_class_[c])],
+          by_region_[static_cast<std::size_t>(row_region_[c])].lame(), mesh.element_kind()));
 
   values_.assign(static_cast<std::size_t>(pattern.nonzeros()), 0.0);
   for (int ei = 0; ei < mesh.elements_x(); ++ei)

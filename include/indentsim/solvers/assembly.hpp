@@ -144,7 +144,7 @@ public:
   double max_strain_intensity() const override { return max_strain_intensity_; }
   std::array<GaussPointState, 4> gauss_point_states(int ei, int ej) const override;
   const ElementMatrix& cached_matrix(int ei, int ej) const {
-    return by_class_[class_of(ei, ej) * by_region_.size() + static_cast<std::size_t>(mesh_.region(ej))];
+    return by_class_[static_cast<std::size_t>(mesh_.column_class(ei)) * row_region_.size() + row_class_[ej]];
   }
   /// The elastic constants of element row ej's region.
   const ElasticMaterial& material(int ej) const { return by_region_[static_cast<std::size_t>(mesh_.region(ej))]; }
@@ -167,7 +167,12 @@ private:
 
   const Mesh& mesh_;
   const StiffnessPattern& pattern_;
-  /// Element matrices at class * regions + region.
+  /// The rows' classes for the matrices: one per (height class, region) pair that occurs, so that
+  /// a region adds matrices only for the rows it has (row_class_ per element row; each class's
+  /// height class and region).
+  std::vector<std::size_t> row_class_;
+  std::vector<int> row_height_class_, row_region_;
+  /// Element matrices at column class * row classes + row class.
   std::vector<ElementMatrix, Eigen::aligned_allocator<ElementMatrix>> by_class_;
   std::vector<ElementQuadrature, Eigen::aligned_allocator<ElementQuadrature>> quadrature_by_class_;
   std::vector<double> values_;
